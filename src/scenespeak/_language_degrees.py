@@ -1,0 +1,160 @@
+"""Degrees of truth of the four directions from one force histogram (private).
+
+Matsakis' effective-forces model (Matsakis, Keller, Wendling, Marjamaa, Sjahputera, IEEE SMC-B
+31(4), 2001), as written down in ``/work/shared/design/language.md``. For a histogram ``h`` of
+``N`` bins (``N`` divisible by 4, ``n = N / 4`` bins per right angle) and a direction ``alpha``
+(a bin index), with ``phi`` the signed bin offset from ``alpha``:
+
+1. Contrary forces are the bins with ``|phi| >= n``; the opposite bin counts half to each side,
+   and so does the bin at ``phi = 0`` on the favourable side (a uniform histogram then scores
+   exactly 0).
+2. On each side, the contrary forces form a moment ``sum f * (|phi| - n)`` about the pivot at
+   ``+-90 deg``; the moment cancels favourable bins from the pivot inwards (a bin at distance
+   ``d`` from the pivot consumes ``f * d``), the last one possibly in part. Cancelled mass joins
+   the contrary mass ``Q``.
+3. ``P`` is the favourable mass left; if ``P = 0`` the degree is 0.
+4. A threshold ``tau``: the trapezoid-weighted mean of the remaining favourable forces around
+   ``alpha`` (weight 1 within +-22.5 deg, falling to 0 at +-45 deg).
+5. The mean deviation ``theta`` is the mean direction (relative to ``alpha``) of the forces above
+   ``tau``: ``sum max(0, f - tau) * phi / sum max(0, f - tau)``.
+6. Degree ``= max(0, 1 - |theta| / (pi/2)) * P / (P + Q)``.
+
+One deliberate change from the design note: step 5 divides by the mass *above the threshold*
+instead of by ``P``. With ``P`` in the denominator the deviation of a spike ``delta`` off the axis
+shrinks by the factor ``1 - tau / f`` (about 3 % for 180 bins), so a spike would not score
+``1 - delta/90``; with the thresholded mass it does, exactly (pinned by
+``test_spike_degree_is_linear_in_the_offset``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+#: The four directions, in the order of their angles 0, 90, 180, 270 degrees (interfaces.md:
+#: 0 = right, 90 = behind = farther from the camera, 180 = left, 270 = in front).
+DIRECTIONS: tuple[str, str, str, str] = ("right", "behind", "left", "front")
+
+#: Half-width (degrees) of the full-weight part of the threshold's trapezoid window.
+TAU_FLAT_DEG = 22.5
+#: Half-width (degrees) where the threshold's trapezoid window reaches 0.
+TAU_ZERO_DEG = 45.0
+
+
+@dataclass(frozen=True)
+class DirectionDegree:
+    """The degree of truth of one direction from one histogram, with what led to it.
+
+    Attributes
+    ----------
+    degree : float
+        In [0, 1].
+    deviation : float
+        Signed mean deviation (radians) of the effective forces from the direction; positive
+        is counter-clockwise (from right towards behind, from behind towards left, ...).
+    effective : float
+        ``P``: favourable mass left after the contrary forces cancelled their share.
+    contrary : float
+        ``Q``: contrary mass plus cancelled favourable mass.
+    """
+
+    degree: float
+    deviation: float
+    effective: float
+    contrary: float
+
+
+def _cancel_side(fav: NDArray[np.float64], dist: NDArray[np.float64], moment: float) -> float:
+    """Cancel favourable forces (ordered from the pivot inwards) with a moment, in place.
+
+    Returns the cancelled mass.
+    """
+    if moment <= 0.0 or fav.size == 0:
+        return 0.0
+    cost = fav * dist
+    cum = np.cumsum(cost)
+    full = int(np.searchsorted(cum, moment, side="right"))  # bins consumed completely
+    cancelled = float(fav[:full].sum())
+    fav[:full] = 0.0
+    if full < fav.size:
+        left = moment - (float(cum[full - 1]) if full > 0 else 0.0)
+        if left > 0.0 and dist[full] > 0.0:
+            part = min(fav[full], left / dist[full])
+            fav[full] -= part
+            cancelled += float(part)
+    return cancelled
+
+
+def direction_degree(h: NDArray[np.float64], index: int) -> DirectionDegree:
+    """Degree of truth that the argument lies in the direction of bin ``index``.
+
+    Parameters
+    ----------
+    h : ndarray, shape (N,)
+        A non-negative force histogram; ``N`` divisible by 4.
+    index : int
+        The bin of the direction (``N/4`` per right angle).
+
+    Returns
+    -------
+    DirectionDegree
+
+    Examples
+    --------
+    >>> h = np.zeros(180); h[75] = 1.0          # a spike at 150 deg
+    >>> round(direction_degree(h, 90).degree, 4)   # 30 deg off "left" (180 deg)
+    0.6667
+    """
+    nbins = h.size
+    n = nbins // 4
+    g = np.roll(h, -index).astype(np.float64)
+    bin_rad = 2.0 * np.pi / nbins
+    # Favourable bins on each side, ordered from the pivot inwards: phi = n-1, ..., 1, 0(half).
+    phis = np.arange(n - 1, -1, -1)
+    dist = (n - phis).astype(np.float64)
+    fav_pos = g[phis].copy()
+    fav_neg = g[(-phis) % nbins].copy()
+    fav_pos[-1] *= 0.5
+    fav_neg[-1] *= 0.5
+    # Contrary bins on each side: |phi| = n .. 2n-1, plus the opposite bin (half each).
+    cphi = np.arange(n, 2 * n)
+    con_pos = g[cphi]
+    con_neg = g[(-cphi) % nbins]
+    opposite = 0.5 * g[2 * n]
+    arm = (cphi - n).astype(np.float64)
+    m_pos = float(con_pos @ arm) + opposite * n
+    m_neg = float(con_neg @ arm) + opposite * n
+    contrary = float(con_pos.sum() + con_neg.sum()) + 2.0 * opposite
+    contrary += _cancel_side(fav_pos, dist, m_pos)
+    contrary += _cancel_side(fav_neg, dist, m_neg)
+
+    # Effective forces as one array over phi = -(n-1) .. (n-1), the bin at 0 whole again.
+    eff = np.concatenate([fav_neg[:-1], [fav_pos[-1] + fav_neg[-1]], fav_pos[::-1][1:]])
+    phi = np.arange(-(n - 1), n) * bin_rad
+    total = float(eff.sum())
+    scale = max(total + contrary, 1e-300)
+    if total <= 1e-12 * scale:
+        return DirectionDegree(0.0, 0.0, max(total, 0.0), contrary)
+    absdeg = np.degrees(np.abs(phi))
+    weight = np.clip((TAU_ZERO_DEG - absdeg) / (TAU_ZERO_DEG - TAU_FLAT_DEG), 0.0, 1.0)
+    tau = float(weight @ eff / weight.sum())
+    above = np.maximum(eff - tau, 0.0)
+    mass = float(above.sum())
+    theta = float(above @ phi / mass) if mass > 0.0 else float(eff @ phi / total)
+    degree = max(0.0, 1.0 - abs(theta) / (np.pi / 2.0)) * total / (total + contrary)
+    return DirectionDegree(float(min(max(degree, 0.0), 1.0)), theta, total, contrary)
+
+
+def four_degrees(h: NDArray[np.float64]) -> dict[str, DirectionDegree]:
+    """Degrees of truth of the four directions (see :data:`DIRECTIONS`).
+
+    Examples
+    --------
+    >>> h = np.ones(180)
+    >>> [round(d.degree, 12) for d in four_degrees(h).values()]
+    [0.0, 0.0, 0.0, 0.0]
+    """
+    n = h.size // 4
+    return {name: direction_degree(h, k * n) for k, name in enumerate(DIRECTIONS)}
