@@ -16,6 +16,7 @@ from scenespeak.objects import (
     build_objects,
     cluster_unknown,
     convex_hull,
+    dbscan,
     heights_along,
     main_cluster,
     make_object,
@@ -216,3 +217,27 @@ def test_build_objects_known_and_unknown() -> None:
     assert [o.label for o in objects] == ["hat", "mug"]
     with pytest.raises(ValueError, match="labels"):
         build_objects(xyz, labels[:-1])
+
+
+@given(
+    arrays(
+        np.float64,
+        st.tuples(st.integers(1, 60), st.just(2)),
+        elements=st.floats(0, 1, allow_nan=False, width=32),
+    ),
+    st.floats(0.02, 0.3),
+    st.integers(1, 5),
+)
+def test_dbscan_matches_scikit_learn(pts: np.ndarray, eps: float, min_samples: int) -> None:
+    from sklearn.cluster import DBSCAN
+
+    ours = dbscan(pts, eps=eps, min_samples=min_samples)
+    model = DBSCAN(eps=eps, min_samples=min_samples).fit(pts)
+    ref = model.labels_
+    # Noise is the same set, and core points are grouped the same way (a border point may go
+    # to either neighbouring cluster in scikit-learn, depending on its visiting order).
+    assert np.array_equal(ours == -1, ref == -1)
+    core = np.zeros(len(pts), bool)
+    core[model.core_sample_indices_] = True
+    a, b = ours[core], ref[core]
+    assert np.array_equal(a[:, None] == a[None, :], b[:, None] == b[None, :])

@@ -97,9 +97,7 @@ def _as_matrix(value: Any, shape: tuple[int, ...], name: str, source: str) -> ND
         if arr.size == size:
             arr = arr.reshape(shape)
         else:
-            raise CalibrationError(
-                source, f"{name} must have shape {shape}, got shape {arr.shape}"
-            )
+            raise CalibrationError(source, f"{name} must have shape {shape}, got shape {arr.shape}")
     if not np.all(np.isfinite(arr)):
         raise CalibrationError(source, f"{name} contains NaN or infinite values")
     return arr
@@ -132,8 +130,9 @@ def _as_dist(value: Any, name: str, source: str) -> NDArray[np.float64]:
 def _check_K(K: NDArray[np.float64], name: str, source: str) -> None:
     if not (K[0, 0] > 0 and K[1, 1] > 0):
         raise CalibrationError(
-            source, f"{name} is singular or invalid: focal lengths must be > 0, got "
-            f"fx={K[0, 0]:g}, fy={K[1, 1]:g}"
+            source,
+            f"{name} is singular or invalid: focal lengths must be > 0, got "
+            f"fx={K[0, 0]:g}, fy={K[1, 1]:g}",
         )
     if not np.allclose(K[2], [0.0, 0.0, 1.0]) or abs(K[1, 0]) > 1e-9:
         raise CalibrationError(
@@ -489,7 +488,7 @@ def _parse_yaml(text: str, p: Path) -> Any:
     if lines and lines[0].startswith("%YAML"):
         lines = lines[1:]  # OpenCV writes "%YAML:1.0", which PyYAML rejects
     try:
-        return yaml.load("\n".join(lines), Loader=_OpenCVYamlLoader)  # noqa: S506 (safe subclass)
+        return yaml.load("\n".join(lines), Loader=_OpenCVYamlLoader)
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         where = f" at line {mark.line + 1}" if mark is not None else ""
@@ -508,7 +507,7 @@ def _parse_opencv_xml(p: Path) -> dict[str, Any]:
         out: dict[str, Any] = {}
         for key in root.keys():
             node = fs.getNode(key)
-            if node.isMap() and not node.mat() is None:  # pragma: no cover - matrices below
+            if node.isMap() and node.mat() is not None:  # pragma: no cover - matrices below
                 out[key] = node.mat()
             elif node.isSeq():
                 out[key] = [node.at(i).real() for i in range(node.size())]
@@ -522,9 +521,7 @@ def _parse_opencv_xml(p: Path) -> dict[str, Any]:
         fs.release()
 
 
-def load_rig(
-    path: str | PathLike[str], *, image_size: tuple[int, int] | None = None
-) -> StereoRig:
+def load_rig(path: str | PathLike[str], *, image_size: tuple[int, int] | None = None) -> StereoRig:
     """Load a stereo calibration file.
 
     Parameters
@@ -624,8 +621,8 @@ def load_ros_rig(
     src = f"{left['source']} + {right['source']}"
     if left["size"] != right["size"]:
         raise CalibrationError(
-            src, f"left and right camera_info have different sizes {left['size']} and "
-            f"{right['size']}"
+            src,
+            f"left and right camera_info have different sizes {left['size']} and {right['size']}",
         )
     P2 = right["P"]
     if P2[0, 0] <= 0:
@@ -732,13 +729,13 @@ class Rectification:
             if side == "left"
             else (rig.K_right, rig.dist_right, self.R2, self.P2)
         )
-        out = cv2.undistortPointsIter(
+        out = cv2.undistortPoints(
             pts.reshape(-1, 1, 2),
             K,
             D,
-            Rr,
-            P,
-            (cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 40, 1e-10),
+            R=Rr,
+            P=P,
+            criteria=(cv2.TERM_CRITERIA_COUNT | cv2.TERM_CRITERIA_EPS, 50, 1e-12),
         )
         return np.asarray(out, dtype=np.float64).reshape(-1, 2)
 
@@ -806,12 +803,11 @@ def rectify(rig: StereoRig, *, alpha: float = 1.0) -> Rectification:
         cy = float(K1[1, 2])
         B = rig.baseline
         P1 = np.array([[f, K1[0, 1], K1[0, 2], 0.0], [0.0, fy, cy, 0.0], [0.0, 0.0, 1.0, 0.0]])
-        P2 = np.array(
-            [[f, K2[0, 1], K2[0, 2], -f * B], [0.0, fy, cy, 0.0], [0.0, 0.0, 1.0, 0.0]]
-        )
+        P2 = np.array([[f, K2[0, 1], K2[0, 2], -f * B], [0.0, fy, cy, 0.0], [0.0, 0.0, 1.0, 0.0]])
         eye = np.eye(3)
-        return Rectification(rig, _readonly(eye), _readonly(eye), _readonly(P1), _readonly(P2),
-                             None, None)
+        return Rectification(
+            rig, _readonly(eye), _readonly(eye), _readonly(P1), _readonly(P2), None, None
+        )
     t = rig.T
     if abs(t[0]) < max(abs(t[1]), abs(t[2])) or t[0] >= 0:
         raise CalibrationError(
@@ -823,8 +819,15 @@ def rectify(rig: StereoRig, *, alpha: float = 1.0) -> Rectification:
     size = rig.image_size
     try:
         R1, R2, P1, P2, _Q, _roi1, _roi2 = cv2.stereoRectify(
-            K1, rig.dist_left, K2, rig.dist_right, size, rig.R, rig.T,
-            flags=cv2.CALIB_ZERO_DISPARITY, alpha=alpha,
+            K1,
+            rig.dist_left,
+            K2,
+            rig.dist_right,
+            size,
+            rig.R,
+            rig.T.reshape(3, 1),
+            flags=cv2.CALIB_ZERO_DISPARITY,
+            alpha=alpha,
         )
     except cv2.error as exc:  # pragma: no cover - validated input should not fail
         raise CalibrationError(rig.source, f"OpenCV cannot rectify this rig: {exc.err}") from None
@@ -877,7 +880,7 @@ def ground_basis(up: ArrayLike = DEFAULT_UP) -> NDArray[np.float64]:
         x = np.cross(y, u)
     x /= np.linalg.norm(x)
     y /= np.linalg.norm(y)
-    return np.vstack([x, y])
+    return np.vstack([x, y]) + 0.0  # + 0.0 turns -0.0 into 0.0
 
 
 def to_ground(xyz: ArrayLike, up: ArrayLike = DEFAULT_UP) -> NDArray[np.float64]:

@@ -10,7 +10,7 @@ Steps for one object, as in the seed paper (section III/IV) with its "future wor
 1. project the points onto the horizontal plane (:func:`project_to_plane`), heights along up
    (:func:`heights_along`);
 2. remove false alarms: the paper's median + fixed radius (:func:`radius_inliers`) and density
-   clustering keeping the main cluster (:func:`main_cluster`, scikit-learn DBSCAN);
+   clustering keeping the main cluster (:func:`main_cluster`, DBSCAN on a k-d tree, :func:`dbscan`);
 3. the convex hull through SciPy's Qhull (:func:`convex_hull`), with the degenerate cases
    (one point, two points, collinear points) made into a thin sliver polygon of a documented
    width and reported in the object's ``notes``.
@@ -37,6 +37,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial import ConvexHull, QhullError
 
+from scenespeak.calibration import ground_basis
 from scenespeak.errors import CalibrationError
 
 __all__ = [
@@ -48,6 +49,7 @@ __all__ = [
     "build_objects",
     "cluster_unknown",
     "convex_hull",
+    "dbscan",
     "heights_along",
     "main_cluster",
     "make_object",
@@ -147,8 +149,14 @@ def _unit(v: ArrayLike, name: str = "up") -> NDArray[np.float64]:
 def plane_basis(up: ArrayLike = DEFAULT_UP) -> NDArray[np.float64]:
     """Orthonormal axes of the horizontal plane and up, as the rows of a 3×3 matrix.
 
-    Row 0 is the plane's x axis (the camera's right direction projected onto the plane), row 1
-    its y axis (the camera's forward direction projected, so depth), row 2 the unit ``up``.
+    Rows 0 and 1 are :func:`scenespeak.calibration.ground_basis` (x = the camera's right
+    direction projected onto the plane, y = its forward direction projected, so depth); row 2 is
+    the unit ``up``.
+
+    Raises
+    ------
+    CalibrationError
+        If ``up`` is not three finite numbers or is the zero vector.
 
     Examples
     --------
@@ -156,17 +164,7 @@ def plane_basis(up: ArrayLike = DEFAULT_UP) -> NDArray[np.float64]:
     [[1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, -1.0, 0.0]]
     """
     u = _unit(up)
-    right = np.array([1.0, 0.0, 0.0])
-    forward = np.array([0.0, 0.0, 1.0])
-    x = right - (right @ u) * u
-    if np.linalg.norm(x) < 1e-6:  # camera rolled by 90°: use forward to fix the frame
-        f = forward - (forward @ u) * u
-        x = np.cross(f, u)
-    x /= np.linalg.norm(x)
-    y = np.cross(u, x)  # right-handed: x right, y away from the camera, u up
-    if y @ forward < 0:
-        y = -y
-    return np.stack([x, y, u])
+    return np.vstack([ground_basis(u), u])
 
 
 def project_to_plane(xyz: ArrayLike, up: ArrayLike = DEFAULT_UP) -> NDArray[np.float64]:
@@ -189,7 +187,7 @@ def project_to_plane(xyz: ArrayLike, up: ArrayLike = DEFAULT_UP) -> NDArray[np.f
     [[0.1, 1.5]]
     """
     p = np.asarray(xyz, dtype=np.float64).reshape(-1, 3)
-    return p @ plane_basis(up)[:2].T
+    return p @ ground_basis(_unit(up)).T
 
 
 def heights_along(xyz: ArrayLike, up: ArrayLike = DEFAULT_UP) -> NDArray[np.float64]:
@@ -221,8 +219,61 @@ def radius_inliers(xy: ArrayLike, radius: float) -> NDArray[np.bool_]:
     return np.linalg.norm(p - med, axis=1) <= radius
 
 
+def dbscan(points: ArrayLike, eps: float, min_samples: int = 3) -> NDArray[np.intp]:
+    """DBSCAN (Ester et al. 1996) on a k-d tree: cluster number per point, -1 for noise.
+
+    The same algorithm and parameters as :class:`sklearn.cluster.DBSCAN` (Euclidean distance,
+    neighbourhoods ``<= eps`` including the point itself, core points with at least
+    ``min_samples`` neighbours): clusters are the connected groups of core points, a border
+    point joins the cluster of its nearest core point. Built on SciPy's ``cKDTree`` because
+    importing ``sklearn.cluster`` alone takes about 2 s, more than describing a whole scene;
+    the tests check the result against scikit-learn's.
+
+    Clusters are numbered in the order of their first core point.
+
+    Examples
+    --------
+    >>> dbscan([[0, 0], [0.01, 0], [0.02, 0], [1, 1]], eps=0.015, min_samples=2).tolist()
+    [0, 0, 0, -1]
+    """
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+    from scipy.spatial import cKDTree
+
+    p = np.asarray(points, dtype=np.float64)
+    n = len(p)
+    labels = np.full(n, -1, dtype=np.intp)
+    if n == 0:
+        return labels
+    tree = cKDTree(p)
+    counts = np.asarray(tree.query_ball_point(p, eps, return_length=True))
+    core = counts >= min_samples
+    if not core.any():
+        return labels
+    pairs = tree.query_pairs(eps, output_type="ndarray")
+    both = core[pairs[:, 0]] & core[pairs[:, 1]] if len(pairs) else np.zeros(0, bool)
+    cc = pairs[both]
+    graph = coo_matrix((np.ones(len(cc), np.int8), (cc[:, 0], cc[:, 1])), shape=(n, n))
+    _, comp = connected_components(graph, directed=False)
+    core_idx = np.flatnonzero(core)
+    # number the clusters by their first core point
+    _, first = np.unique(comp[core_idx], return_index=True)
+    order = np.argsort(core_idx[first])
+    remap = np.empty(len(first), dtype=np.intp)
+    remap[order] = np.arange(len(first))
+    uniq = np.unique(comp[core_idx])
+    labels[core_idx] = remap[np.searchsorted(uniq, comp[core_idx])]
+    border = np.flatnonzero(~core)
+    if len(border):
+        core_tree = cKDTree(p[core_idx])
+        dist, nearest = core_tree.query(p[border], k=1, distance_upper_bound=eps * (1 + 1e-12))
+        ok = np.isfinite(dist)
+        labels[border[ok]] = labels[core_idx[nearest[ok]]]
+    return labels
+
+
 def main_cluster(xy: ArrayLike, eps: float, min_samples: int = 3) -> NDArray[np.bool_]:
-    """Keep the largest DBSCAN cluster (density clustering, scikit-learn).
+    """Keep the largest DBSCAN cluster (density clustering, :func:`dbscan`).
 
     When DBSCAN finds no cluster at all (every point is noise, e.g. three scattered keypoints),
     all points are kept: the caller decides whether so few points make an object.
@@ -248,9 +299,7 @@ def main_cluster(xy: ArrayLike, eps: float, min_samples: int = 3) -> NDArray[np.
         return np.zeros(0, dtype=bool)
     if n < min_samples:
         return np.ones(n, dtype=bool)
-    from sklearn.cluster import DBSCAN  # imported here: sklearn takes ~0.5 s to import
-
-    labels = DBSCAN(eps=eps, min_samples=min_samples).fit_predict(p)
+    labels = dbscan(p, eps=eps, min_samples=min_samples)
     good = labels[labels >= 0]
     if good.size == 0:
         return np.ones(n, dtype=bool)
@@ -265,12 +314,14 @@ def cluster_unknown(
     eps: float = 0.04,
     min_points: int = 8,
     max_extent: float = 0.6,
+    max_distance: float | None = None,
 ) -> NDArray[np.intp]:
     """Group points no known object claims into unknown objects.
 
     DBSCAN on the horizontal plane (``eps`` metres, ``min_samples = 3``); clusters with fewer
-    than ``min_points`` points (noise) or wider than ``max_extent`` metres on the plane (the
-    floor, a wall, the table) are dropped.
+    than ``min_points`` points (noise), wider than ``max_extent`` metres on the plane (the
+    floor, a wall, the table) or, with ``max_distance``, whose median point is farther than that
+    from the camera (the background) are dropped.
 
     Returns
     -------
@@ -292,10 +343,8 @@ def cluster_unknown(
     out = np.full(len(p), -1, dtype=np.intp)
     if len(p) < max(min_points, 3):
         return out
-    from sklearn.cluster import DBSCAN
-
     xy = project_to_plane(p, up)
-    raw = DBSCAN(eps=eps, min_samples=3).fit_predict(xy)
+    raw = dbscan(xy, eps=eps, min_samples=3)
     kept: list[tuple[float, NDArray[np.bool_]]] = []
     for k in range(int(raw.max(initial=-1)) + 1):
         m = raw == k
@@ -303,6 +352,8 @@ def cluster_unknown(
             continue
         span = xy[m].max(axis=0) - xy[m].min(axis=0)
         if float(np.max(span)) > max_extent:
+            continue
+        if max_distance is not None and np.median(np.linalg.norm(p[m], axis=1)) > max_distance:
             continue
         kept.append((float(np.median(xy[m, 0])), m))
     kept.sort(key=lambda t: t[0])
@@ -397,7 +448,7 @@ def make_object(
     min_samples: int = 3,
     min_points: int = 3,
     sliver_width: float = SLIVER_WIDTH,
-    max_points: int | None = 4000,
+    max_points: int | None = 400,
     seed: int = 0,
 ) -> SceneObject | Skipped:
     """Make one object from its 3-D points: project, remove outliers, hull.
@@ -491,6 +542,7 @@ def build_objects(
     unknown_eps: float = 0.04,
     unknown_min_points: int = 8,
     unknown_max_extent: float = 0.6,
+    unknown_max_distance: float | None = None,
     **options: object,
 ) -> tuple[list[SceneObject], list[Skipped]]:
     """Objects from labelled 3-D points: one per label, plus clustered unknown objects.
@@ -546,6 +598,7 @@ def build_objects(
             eps=unknown_eps,
             min_points=unknown_min_points,
             max_extent=unknown_max_extent,
+            max_distance=unknown_max_distance,
         )
         for k in range(int(groups.max(initial=-1)) + 1):
             name = f"unknown object {k + 1}"

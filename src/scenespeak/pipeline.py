@@ -1,0 +1,632 @@
+"""The whole chain: a stereo pair, its rig and an object database → objects, relations, words.
+
+:func:`describe_scene` runs the stages of ``docs/architecture.md`` once each and keeps every
+stage's result in a frozen :class:`SceneDescription`:
+
+1. SIFT on both images and stereo matching (:func:`scenespeak.stereo.stereo_points`; SIFT runs
+   once per image and the left features are reused for labelling);
+2. labelling of the left keypoints against the database (ratio test + geometric check,
+   :meth:`scenespeak.database.ObjectDatabase.label`);
+3. the distance strategy: for each recognised object its training outline, carried into the left
+   image by the fitted homography, selects a region whose depth is taken from dense stereo
+   (OpenCV StereoSGBM, computed once per pair over the disparity range the objects need), so
+   that a far object gets the hull of its visible surface rather than of three keypoints; the
+   keypoints are the fallback;
+4. objects on the horizontal plane (:mod:`scenespeak.objects`): outlier removal, convex hull,
+   unknown points clustered into "unknown object N"; objects that cannot be described are
+   listed in ``skipped`` with the reason;
+5. every ordered pair of objects through the Histogram of Forces and the rule base
+   (:mod:`scenespeak.language`), with the heights along up for the vertical relations.
+
+:meth:`SceneDescription.to_dict` gives exactly the JSON of ``interfaces.md`` (plus extra
+fields); :meth:`SceneDescription.to_text` the sentences for people.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Iterator, Mapping
+from concurrent.futures import ThreadPoolExecutor
+from contextlib import contextmanager
+from dataclasses import dataclass, field
+from os import PathLike
+from pathlib import Path
+from typing import Any
+
+import cv2
+import numpy as np
+from numpy.typing import NDArray
+
+from scenespeak.errors import DatabaseError, ImageError, InputError
+from scenespeak.features import detect, to_gray
+from scenespeak.objects import SceneObject, Skipped, build_objects, make_object
+
+__all__ = [
+    "PipelineOptions",
+    "SceneDescription",
+    "database_from_dataset",
+    "describe_files",
+    "describe_scene",
+]
+
+
+@dataclass(frozen=True)
+class PipelineOptions:
+    """Knobs of :func:`describe_scene` (defaults are the ones the CLI uses).
+
+    Attributes
+    ----------
+    ratio : float
+        Lowe's ratio for left/right matching (the paper's 0.6).
+    label_ratio : float
+        Ratio test for labelling against the database (the second neighbour is the nearest
+        descriptor of another object, so a looser value than for stereo is right).
+    min_inliers : int
+        Geometric inliers needed to accept a recognised object.
+    dense : bool
+        Take recognised objects' points from dense stereo inside their carried outline.
+    dense_min_points : int
+        Fewer valid dense points than this: fall back to the keypoints.
+    unknown : bool
+        Cluster unlabelled keypoints into unknown objects.
+    unknown_max_distance : float
+        Unknown clusters farther than this from the camera (metres) are background, not
+        objects (the seed paper's scenes are 0.5–2 m away).
+    min_points : int
+        Points an object needs after outlier removal (3 for a hull; see ``objects.make_object``).
+    outliers : str
+        ``"both"``, ``"radius"``, ``"dbscan"`` or ``"none"`` (see ``objects.make_object``).
+    radius, eps : float
+        The paper's fixed radius and DBSCAN's neighbourhood radius, metres.
+    directions : int
+        Bins of the force histograms.
+    summary : bool
+        Also write a short scene summary (``language.summarize_scene``).
+    """
+
+    ratio: float = 0.6
+    label_ratio: float = 0.8
+    min_inliers: int = 8
+    dense: bool = True
+    dense_min_points: int = 30
+    unknown: bool = True
+    unknown_max_distance: float = 2.5
+    min_points: int = 3
+    outliers: str = "both"
+    radius: float = 0.5
+    eps: float = 0.05
+    directions: int = 180
+    summary: bool = True
+
+
+@dataclass(frozen=True, eq=False)
+class SceneDescription:
+    """Everything :func:`describe_scene` computed, stage by stage.
+
+    Attributes
+    ----------
+    left, right : ndarray
+        The input images (as given).
+    rig : StereoRig
+        The calibration.
+    features_left, features_right : Features
+        SIFT features of each image.
+    points : Points3D
+        Matched and triangulated keypoints (left camera frame).
+    stereo : StereoResult
+        The whole stereo stage (rectification, matches, the dense disparity map if computed).
+    point_labels : tuple of (str or None)
+        The object each stereo point was labelled with, None for unknown.
+    labelling : Labelling or None
+        The database's labelling of the left keypoints (with its detections).
+    objects : tuple of SceneObject
+        Described objects.
+    skipped : tuple of Skipped
+        Objects that could not be described, with the reason.
+    relations : tuple of Relation
+        Every ordered pair of described objects.
+    histograms : dict of (str, str) to (f0, f2)
+        The force histograms of each ordered pair (f2 is the hybrid F02 where F2 is undefined).
+    summary : str
+        A short paragraph about the scene ("" without objects or when switched off).
+    timings : dict of str to float
+        Seconds spent per stage.
+    sources : dict of str to str
+        The files the inputs came from, when known.
+    """
+
+    left: NDArray[np.generic]
+    right: NDArray[np.generic]
+    rig: Any
+    features_left: Any
+    features_right: Any
+    points: Any
+    stereo: Any
+    point_labels: tuple[str | None, ...]
+    labelling: Any
+    objects: tuple[SceneObject, ...]
+    skipped: tuple[Skipped, ...]
+    relations: tuple[Any, ...]
+    histograms: Mapping[tuple[str, str], tuple[NDArray[np.float64], NDArray[np.float64]]]
+    summary: str = ""
+    timings: Mapping[str, float] = field(default_factory=dict)
+    sources: Mapping[str, str] = field(default_factory=dict)
+
+    @property
+    def up(self) -> NDArray[np.float64]:
+        """The world's up direction in the left camera frame."""
+        return np.asarray(self.rig.up, dtype=np.float64)
+
+    @property
+    def detections(self) -> tuple[Any, ...]:
+        """Objects recognised in the left image (``Detection``), best first."""
+        return () if self.labelling is None else tuple(self.labelling.detections)
+
+    def object(self, label: str) -> SceneObject | None:
+        """The described object with this label, if any."""
+        for obj in self.objects:
+            if obj.label == label:
+                return obj
+        return None
+
+    def relation(self, argument: str, referent: str) -> Any:
+        """The relation of ``argument`` to ``referent``, or None."""
+        for rel in self.relations:
+            if rel.argument == argument and rel.referent == referent:
+                return rel
+        return None
+
+    def to_dict(self) -> dict[str, Any]:
+        """The JSON of ``scenespeak describe --format json`` (``interfaces.md``), plus extras.
+
+        ``objects`` (label, points, centroid, hull; extras: source, notes, plane_centroid,
+        height_range), ``relations`` (argument, referent, primary, secondary, sentence, f0, f2;
+        extras from :meth:`Relation.to_dict`), ``skipped`` (label, reason); extras ``summary``,
+        ``up``, ``stereo_points``, ``timings_ms``.
+        """
+        objects = []
+        for o in self.objects:
+            objects.append(
+                {
+                    "label": o.label,
+                    "points": int(o.n_points),
+                    "centroid": [float(v) for v in o.centroid],
+                    "hull": [[float(x), float(y)] for x, y in o.hull],
+                    "source": o.source,
+                    "notes": list(o.notes),
+                    "plane_centroid": [float(v) for v in o.plane_centroid],
+                    "height_range": [float(o.heights.min()), float(o.heights.max())],
+                }
+            )
+        relations = []
+        for rel in self.relations:
+            d = rel.to_dict()
+            f0, f2 = self.histograms[(rel.argument, rel.referent)]
+            head = {
+                "argument": rel.argument,
+                "referent": rel.referent,
+                "primary": rel.primary,
+                "secondary": rel.secondary,
+                "sentence": rel.sentence,
+                "f0": [float(v) for v in f0],
+                "f2": [float(v) for v in f2],
+            }
+            head.update({k: v for k, v in d.items() if k not in head})
+            relations.append(head)
+        return {
+            "objects": objects,
+            "relations": relations,
+            "skipped": [{"label": s.label, "reason": s.reason} for s in self.skipped],
+            "summary": self.summary,
+            "up": [float(v) for v in self.up],
+            "stereo_points": len(self.point_labels),
+            "timings_ms": {k: round(v * 1000.0, 2) for k, v in self.timings.items()},
+        }
+
+    def to_text(self) -> str:
+        """The sentences for people: every ordered pair, then what was not described."""
+        lines = [rel.sentence for rel in self.relations]
+        if not self.objects:
+            lines.append("No object could be described in this scene.")
+        elif len(self.objects) == 1:
+            lines.append(f"Only the {self.objects[0].label} was described: nothing to relate.")
+        for s in self.skipped:
+            lines.append(f"Not described: the {s.label} ({s.reason}).")
+        return "\n".join(lines)
+
+
+# --------------------------------------------------------------------------------------------
+# the chain
+
+
+@contextmanager
+def _timed(timings: dict[str, float], name: str) -> Iterator[None]:
+    t0 = time.perf_counter()
+    try:
+        yield
+    finally:
+        timings[name] = timings.get(name, 0.0) + time.perf_counter() - t0
+
+
+def _outline_mask(outline: NDArray[np.float64], shape: tuple[int, int]) -> NDArray[np.bool_]:
+    """Fill a polygon (pixel coordinates, column/row) into a boolean mask of ``shape``."""
+    mask = np.zeros(shape, dtype=np.uint8)
+    pts = np.round(np.asarray(outline, dtype=np.float64) * 16).astype(np.int32)
+    if len(pts) >= 3:
+        cv2.fillPoly(mask, [pts.reshape(-1, 1, 2)], 1, lineType=cv2.LINE_8, shift=4)
+    return mask.astype(bool)
+
+
+def _points_inside(xy: NDArray[np.float64], mask: NDArray[np.bool_]) -> NDArray[np.bool_]:
+    h, w = mask.shape
+    c = np.clip(np.round(xy[:, 0]).astype(np.intp), 0, w - 1)
+    r = np.clip(np.round(xy[:, 1]).astype(np.intp), 0, h - 1)
+    inside = (xy[:, 0] >= -0.5) & (xy[:, 0] < w - 0.5) & (xy[:, 1] >= -0.5) & (xy[:, 1] < h - 0.5)
+    return inside & mask[r, c]
+
+
+def _relate_all(
+    objects: tuple[SceneObject, ...], directions: int
+) -> tuple[list[Any], dict[tuple[str, str], tuple[NDArray[np.float64], NDArray[np.float64]]]]:
+    """Every ordered pair through the force histograms and the rule base.
+
+    ``language.relate`` does not return the histograms the JSON must carry, so the same steps
+    are taken here with the public functions (``forces.force_histogram`` /
+    ``hybrid_histogram``, ``language.vertical_relation``, ``language.describe_relation``);
+    F(B, A) is F(A, B) turned by 180°, so each unordered pair is computed once.
+    """
+    from scenespeak import forces, language
+
+    relations: list[Any] = []
+    hists: dict[tuple[str, str], tuple[NDArray[np.float64], NDArray[np.float64]]] = {}
+    n = len(objects)
+    half = directions // 2
+    for i in range(n):
+        for j in range(i + 1, n):
+            a, b = objects[i], objects[j]
+            inter = forces.intersection_area(a.hull, b.hull)
+            area_a = abs(forces.polygon_area(a.hull))
+            area_b = abs(forces.polygon_area(b.hull))
+            intersecting = inter > 1e-12 * min(area_a, area_b)
+            f0 = np.asarray(
+                forces.force_histogram(a.hull, b.hull, r=0.0, directions=directions), float
+            )
+            hybrid = intersecting
+            f2 = None
+            if not intersecting:
+                try:
+                    f2 = np.asarray(
+                        forces.force_histogram(a.hull, b.hull, r=2.0, directions=directions),
+                        float,
+                    )
+                    if not np.all(np.isfinite(f2)):
+                        f2 = None
+                except (ValueError, ArithmeticError):
+                    f2 = None
+            if f2 is None:
+                hybrid = True
+                f2 = np.asarray(forces.hybrid_histogram(a.hull, b.hull, directions=directions))
+            overlap_min = inter / max(min(area_a, area_b), 1e-300)
+            for arg, ref, h0, h2, area in (
+                (a, b, f0, f2, area_a),
+                (b, a, np.roll(f0, half), np.roll(f2, half), area_b),
+            ):
+                vertical = language.vertical_relation(
+                    arg.heights, ref.heights, horizontal_overlap=overlap_min
+                )
+                rel = language.describe_relation(
+                    h0,
+                    h2,
+                    arg.label,
+                    ref.label,
+                    overlap=inter / area if intersecting else 0.0,
+                    vertical=vertical,
+                    hybrid=hybrid,
+                )
+                relations.append(rel)
+                hists[(arg.label, ref.label)] = (h0, h2)
+    order = {(o.label): k for k, o in enumerate(objects)}
+    relations.sort(key=lambda r: (order[r.argument], order[r.referent]))
+    return relations, hists
+
+
+def describe_scene(
+    left: NDArray[np.generic],
+    right: NDArray[np.generic],
+    rig: Any,
+    db: Any,
+    *,
+    options: PipelineOptions | None = None,
+    sources: Mapping[str, str] | None = None,
+    progress: Callable[[str], None] | None = None,
+    **overrides: Any,
+) -> SceneDescription:
+    """Describe a stereo pair: objects, their hulls, and every ordered pair in words.
+
+    Parameters
+    ----------
+    left, right : ndarray
+        The stereo pair (gray or RGB, same size, the rig's size).
+    rig : StereoRig
+        Its calibration (``scenespeak.calibration.load_rig``).
+    db : ObjectDatabase
+        The object database (``scenespeak.database.ObjectDatabase.open``).
+    options : PipelineOptions, optional
+        The knobs; keyword ``overrides`` replace single fields (``dense=False``, ...).
+    sources : mapping, optional
+        File names of the inputs ("left", "right", "calib", "db"), for messages and the record.
+    progress : callable, optional
+        Called with the name of each stage as it starts.
+
+    Returns
+    -------
+    SceneDescription
+
+    Raises
+    ------
+    ImageError
+        Images of different sizes, or a scene without any stereo match (no texture).
+    DatabaseError
+        An empty database.
+    """
+    from dataclasses import replace
+
+    from scenespeak import stereo
+
+    opts = options or PipelineOptions()
+    if overrides:
+        opts = replace(opts, **overrides)
+    src = dict(sources or {})
+    lname, rname = src.get("left", "left image"), src.get("right", "right image")
+    stereo.check_pair(left, right, rig, left_name=lname, right_name=rname)
+    if len(db) == 0:
+        raise DatabaseError(
+            src.get("db", getattr(db, "path", "database")),
+            "the database holds no objects; add some with `scenespeak db add`",
+        )
+    timings: dict[str, float] = {}
+    say = progress or (lambda _stage: None)
+
+    # SIFT once per image, the two images at the same time (OpenCV releases the GIL), and the
+    # labelling of the left keypoints while the right image is still being processed. The
+    # database stays in this thread (SQLite connections belong to their thread).
+    say("sift")
+    with _timed(timings, "sift"), ThreadPoolExecutor(max_workers=1) as pool:
+        gray_r = to_gray(right)
+        future_r = pool.submit(detect, gray_r, precise_upscale=False)
+        feats_l = detect(to_gray(left), precise_upscale=False)
+        with _timed(timings, "label"):
+            labelling = db.label(feats_l, ratio=opts.label_ratio, min_inliers=opts.min_inliers)
+        feats_r = future_r.result()
+    timings["sift"] -= timings["label"]
+
+    say("stereo")
+    with _timed(timings, "stereo"):
+        result = stereo.stereo_points(
+            left,
+            right,
+            rig,
+            ratio=opts.ratio,
+            features_left=feats_l,
+            features_right=feats_r,
+            left_name=lname,
+            right_name=rname,
+        )
+    points = result.points
+    if len(points.xyz) == 0:
+        raise ImageError(
+            lname,
+            f"no stereo matches ({len(feats_l)} SIFT keypoints in the left image, "
+            f"{len(feats_r)} in the right): the scene has too little texture to describe",
+        )
+    kp_names = labelling.names()
+    point_labels = tuple(kp_names[int(i)] for i in points.left_index)
+
+    say("objects")
+    with _timed(timings, "objects"):
+        objects, skipped = _objects(left, right, result, point_labels, labelling, opts)
+
+    say("relations")
+    with _timed(timings, "relations"):
+        relations, hists = _relate_all(objects, opts.directions)
+        summary = ""
+        if opts.summary and relations:
+            from scenespeak.language import summarize_scene
+
+            summary = summarize_scene(
+                relations, centroids={o.label: o.plane_centroid for o in objects}
+            )
+
+    return SceneDescription(
+        left=left,
+        right=right,
+        rig=rig,
+        features_left=feats_l,
+        features_right=feats_r,
+        points=points,
+        stereo=result,
+        point_labels=point_labels,
+        labelling=labelling,
+        objects=objects,
+        skipped=tuple(skipped),
+        relations=tuple(relations),
+        histograms=hists,
+        summary=summary,
+        timings=timings,
+        sources=src,
+    )
+
+
+def _objects(
+    left: NDArray[np.generic],
+    right: NDArray[np.generic],
+    result: Any,
+    point_labels: tuple[str | None, ...],
+    labelling: Any,
+    opts: PipelineOptions,
+) -> tuple[tuple[SceneObject, ...], list[Skipped]]:
+    """Known objects (dense region or keypoints), then unknown clusters."""
+    points = result.points
+    up = np.asarray(result.rect.rig.up, dtype=np.float64)
+    shape = left.shape[:2]
+    obj_opts: dict[str, Any] = {
+        "outliers": opts.outliers,
+        "radius": opts.radius,
+        "eps": opts.eps,
+        "min_points": opts.min_points,
+    }
+    labels_arr = np.array(["" if v is None else v for v in point_labels], dtype=object)
+    claimed = labels_arr != ""
+    objects: list[SceneObject] = []
+    skipped: list[Skipped] = []
+    masks = {d.label: _outline_mask(d.outline_in_scene, shape) for d in labelling.detections}
+    dense_xyz = _dense_regions(left, right, result, masks) if opts.dense else {}
+    for det in labelling.detections:
+        name = det.label
+        claimed |= _points_inside(points.left_xy, masks[name])
+        kp = np.asarray(points.xyz)[labels_arr == name]
+        region = dense_xyz.get(name)
+        result_obj: SceneObject | Skipped
+        note = None
+        if region is not None and len(region) >= opts.dense_min_points:
+            result_obj = make_object(name, region, up, source="dense", **obj_opts)
+        else:
+            if opts.dense:
+                n_dense = 0 if region is None else len(region)
+                note = f"dense stereo gave {n_dense} points in its outline, keypoints used"
+            result_obj = make_object(name, kp, up, source="keypoints", **obj_opts)
+        if isinstance(result_obj, Skipped):
+            reason = result_obj.reason
+            if not len(kp):
+                reason = (
+                    "recognised in the left image, but none of its keypoints was matched "
+                    "in the right image"
+                )
+            skipped.append(Skipped(name, f"{reason}; {note}" if note else reason))
+        else:
+            if note:
+                result_obj = _with_note(result_obj, note)
+            objects.append(result_obj)
+    if opts.unknown:
+        free = ~claimed
+        extra, extra_skipped = build_objects(
+            np.asarray(points.xyz)[free],
+            [None] * int(free.sum()),
+            up,
+            unknown=True,
+            unknown_max_distance=opts.unknown_max_distance,
+            **obj_opts,
+        )
+        objects.extend(extra)
+        skipped.extend(extra_skipped)
+    return tuple(objects), skipped
+
+
+def _with_note(obj: SceneObject, note: str) -> SceneObject:
+    from dataclasses import replace
+
+    return replace(obj, notes=(*obj.notes, note))
+
+
+def _dense_regions(
+    left: NDArray[np.generic],
+    right: NDArray[np.generic],
+    result: Any,
+    masks: Mapping[str, NDArray[np.bool_]],
+) -> dict[str, NDArray[np.float64]]:
+    """3-D points of each recognised object's outline from dense stereo.
+
+    The stereo stage's own SGBM map (computed once per pair to verify the matches) is reused;
+    without one, SGBM runs once over the bounding box of all outlines and the disparity range
+    of the keypoints.
+    """
+    from scenespeak import stereo
+
+    if not masks:
+        return {}
+    dense = result.dense
+    if dense is None:
+        union = np.logical_or.reduce(list(masks.values()))
+        if not union.any():
+            return {}
+        ys, xs = np.nonzero(union)
+        roi = (int(xs.min()), int(ys.min()), int(xs.max()) + 1, int(ys.max()) + 1)
+        if result.rect.needs_resampling:
+            roi = None  # the outline is in input pixels; the map is rectified
+        dense = stereo.dense_disparity(
+            left, right, result.rect, keypoint_disparities=result.points.disparity, roi=roi
+        )
+    out: dict[str, NDArray[np.float64]] = {}
+    for name, m in masks.items():
+        xyz, _ = stereo.region_points(dense, m)
+        out[name] = np.asarray(xyz, dtype=np.float64).reshape(-1, 3)
+    return out
+
+
+# --------------------------------------------------------------------------------------------
+# files
+
+
+def describe_files(
+    left_path: str | PathLike[str],
+    right_path: str | PathLike[str],
+    calib_path: str | PathLike[str],
+    db_path: str | PathLike[str],
+    *,
+    calib_right: str | PathLike[str] | None = None,
+    progress: Callable[[str], None] | None = None,
+    **options: Any,
+) -> SceneDescription:
+    """:func:`describe_scene` on files: calibration, two images and a database file.
+
+    Every problem with the inputs raises a :class:`~scenespeak.errors.ScenespeakError` that
+    names the file (missing, corrupt or empty image, images of different sizes, a calibration
+    with NaN or a singular matrix, a file that is not an object database, an empty database,
+    a scene without texture).
+    """
+    from scenespeak.calibration import load_rig, load_ros_rig
+    from scenespeak.database import ObjectDatabase
+    from scenespeak.features import load_image
+
+    rig = load_rig(calib_path) if calib_right is None else load_ros_rig(calib_path, calib_right)
+    left = load_image(left_path, gray=False)
+    right = load_image(right_path, gray=False)
+    sources = {
+        "left": str(left_path),
+        "right": str(right_path),
+        "calib": str(calib_path),
+        "db": str(db_path),
+    }
+    with ObjectDatabase.open(db_path, readonly=True) as db:
+        return describe_scene(left, right, rig, db, sources=sources, progress=progress, **options)
+
+
+def database_from_dataset(
+    dataset: str | PathLike[str], db_path: str | PathLike[str], *, replace: bool = True
+) -> list[str]:
+    """Learn every object of a generated dataset into a database file (created if missing).
+
+    Reads ``DATASET/objects/<label>/view_NN.png`` with their ``view_NN_mask.png`` (the folder
+    format of ``docs/scenes.md``). Returns the labels learnt.
+
+    Raises
+    ------
+    InputError
+        If the dataset has no ``objects`` folder.
+    """
+    from scenespeak.database import ObjectDatabase
+
+    root = Path(dataset) / "objects"
+    if not root.is_dir():
+        raise InputError(root, "no training views here (expected objects/<label>/view_NN.png)")
+    labels: list[str] = []
+    with ObjectDatabase.open(db_path, create=True) as database:
+        for folder in sorted(p for p in root.iterdir() if p.is_dir()):
+            views = sorted(v for v in folder.glob("view_*.png") if not v.stem.endswith("_mask"))
+            if not views:
+                continue
+            masks = [v.with_name(v.stem + "_mask.png") for v in views]
+            use_masks = masks if all(m.exists() for m in masks) else None
+            database.add_object(folder.name, views, masks=use_masks, replace=replace)
+            labels.append(folder.name)
+    return labels

@@ -1,0 +1,305 @@
+"""The ``scenespeak`` command: every command once, and every bad input of issue 4.
+
+The scene is a real stereo pair of photographs: crops of scikit-image's photos pasted as
+fronto-parallel cards at known depths (the exact disparity ``f·B/Z`` apart in the right image)
+in front of a textured wall. Bad input must give one line on stderr naming the file and the
+problem, exit status 2, and never a traceback.
+"""
+
+from __future__ import annotations
+
+import json
+import sqlite3
+import subprocess
+import sys
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+from skimage import data, transform
+
+from scenespeak.cli import main
+
+W, H, BASELINE, HFOV = 640, 480, 0.12, 60.0
+FOCAL = (W / 2) / np.tan(np.radians(HFOV / 2))
+#: label → (x, Z, width) in metres: a card of that photo at that place.
+CARDS = {"astronaut": (-0.25, 1.2, 0.22), "coffee": (0.22, 1.0, 0.2)}
+
+
+def _photo(name: str, size: tuple[int, int]) -> np.ndarray:
+    img = getattr(data, name)()
+    img = np.stack([img] * 3, -1) if img.ndim == 2 else img[..., :3]
+    return (transform.resize(img, size, anti_aliasing=True) * 255).astype(np.uint8)
+
+
+def _write(path: Path, rgb: np.ndarray) -> Path:
+    cv2.imwrite(str(path), cv2.cvtColor(rgb, cv2.COLOR_RGB2BGR))
+    return path
+
+
+@pytest.fixture(scope="module")
+def scene(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
+    """Files of one synthetic stereo scene, its calibration, training images and a database."""
+    root = tmp_path_factory.mktemp("cli_scene")
+    rng = np.random.default_rng(0)
+    wall = cv2.resize(
+        rng.integers(0, 255, (H // 8, (W + 200) // 8, 3)).astype(np.uint8),
+        (W + 200, H),
+        interpolation=cv2.INTER_LINEAR,
+    )
+    d_wall = round(FOCAL * BASELINE / 4.0)
+    left = wall[:, 100 : 100 + W].copy()
+    right = wall[:, 100 + d_wall : 100 + d_wall + W].copy()
+    for name, (x, z, width) in sorted(CARDS.items(), key=lambda kv: -kv[1][1]):
+        wpx = round(FOCAL * width / z)
+        u = round(W / 2 + FOCAL * x / z - wpx / 2)
+        v = H // 2 - wpx // 2
+        d = round(FOCAL * BASELINE / z)
+        card = _photo(name, (wpx, wpx))
+        left[v : v + wpx, u : u + wpx] = card
+        right[v : v + wpx, u - d : u - d + wpx] = card
+    files = {
+        "left": _write(root / "left.png", left),
+        "right": _write(root / "right.png", right),
+        "calib": root / "calib.json",
+    }
+    files["calib"].write_text(
+        json.dumps({"baseline": BASELINE, "hfov_deg": HFOV, "image_size": [W, H]})
+    )
+    for name in CARDS:
+        files[f"train_{name}"] = _write(root / f"{name}.png", _photo(name, (240, 240)))
+    db = root / "objects.db"
+    for name in CARDS:
+        assert (
+            main(["db", "add", "--db", str(db), "--label", name, str(files[f"train_{name}"])]) == 0
+        )
+    files["db"] = db
+    return files
+
+
+def _run(args: list[str], capsys: pytest.CaptureFixture[str]) -> tuple[int, str, str]:
+    code = main([str(a) for a in args])
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+def _assert_one_line_error(code: int, err: str, *needles: str) -> None:
+    assert code == 2
+    lines = err.strip().splitlines()
+    assert len(lines) == 1, err
+    assert lines[0].startswith("scenespeak: error: ")
+    assert "Traceback" not in err
+    for needle in needles:
+        assert needle in lines[0], (needle, lines[0])
+
+
+def _describe(scene: dict[str, Path], **repl: Path) -> list[str]:
+    f = {**scene, **repl}
+    return ["describe", "--db", f["db"], "--calib", f["calib"], f["left"], f["right"]]
+
+
+# --------------------------------------------------------------------------------------------
+# the commands
+
+
+def test_db_list_and_remove(scene: dict[str, Path], capsys: pytest.CaptureFixture[str]) -> None:
+    code, out, _ = _run(["db", "list", "--db", scene["db"], "--json"], capsys)
+    assert code == 0
+    rows = json.loads(out)["objects"]
+    assert sorted(r["label"] for r in rows) == sorted(CARDS)
+    assert all(r["descriptors"] > 50 for r in rows)
+    copy = scene["db"].with_name("copy.db")
+    copy.write_bytes(scene["db"].read_bytes())
+    code, out, _ = _run(["db", "remove", "--db", copy, "coffee"], capsys)
+    assert code == 0
+    code, out, _ = _run(["db", "list", "--db", copy], capsys)
+    assert out.split()[0] == "astronaut" and "coffee" not in out
+    code, _, err = _run(["db", "remove", "--db", copy, "coffee"], capsys)
+    _assert_one_line_error(code, err, "coffee")
+
+
+def test_describe_json_follows_the_interface(
+    scene: dict[str, Path], capsys: pytest.CaptureFixture[str]
+) -> None:
+    code, out, err = _run([*_describe(scene), "--format", "json", "--no-unknown"], capsys)
+    assert code == 0, err
+    doc = json.loads(out)  # stdout is exactly one JSON object
+    labels = {o["label"] for o in doc["objects"]}
+    assert labels == set(CARDS)
+    for o in doc["objects"]:
+        assert set(o) >= {"label", "points", "centroid", "hull"}
+        assert len(o["centroid"]) == 3 and len(o["hull"]) >= 3
+    assert len(doc["relations"]) == 2  # every ordered pair
+    for r in doc["relations"]:
+        assert set(r) >= {"argument", "referent", "primary", "secondary", "sentence", "f0", "f2"}
+        assert len(r["f0"]) == len(r["f2"]) == 180
+    rel = {(r["argument"], r["referent"]): r for r in doc["relations"]}
+    # the astronaut card is 25 cm left and 20 cm behind the coffee card
+    assert rel[("astronaut", "coffee")]["primary"] == "left"
+    assert rel[("coffee", "astronaut")]["primary"] == "right"
+    assert doc["skipped"] == []
+
+
+def test_describe_text(scene: dict[str, Path], capsys: pytest.CaptureFixture[str]) -> None:
+    code, out, _ = _run(_describe(scene), capsys)
+    assert code == 0
+    assert "The astronaut is" in out and "of the coffee" in out
+
+
+def test_points_json_and_ply(
+    scene: dict[str, Path], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    args = ["points", "--calib", scene["calib"], scene["left"], scene["right"]]
+    code, out, _ = _run(args, capsys)
+    assert code == 0
+    pts = json.loads(out)["points"]
+    assert len(pts) > 100
+    p = pts[0]
+    # the right-image column is the left one minus the disparity f·B/Z
+    disparity = p["left"][0] - p["right"][0]
+    assert disparity == pytest.approx(FOCAL * BASELINE / p["xyz"][2], abs=0.5)
+    ply = tmp_path / "points.ply"
+    code, _, _ = _run([*args, "--format", "ply", "--out", ply], capsys)
+    assert code == 0
+    text = ply.read_text()
+    assert text.startswith("ply\n") and f"element vertex {len(pts)}" in text
+
+
+def test_python_dash_m_runs_the_same_command(scene: dict[str, Path]) -> None:
+    proc = subprocess.run(
+        [sys.executable, "-m", "scenespeak", "db", "list", "--db", str(scene["db"])],
+        capture_output=True,
+        text=True,
+        check=False,
+    )
+    assert proc.returncode == 0, proc.stderr
+    assert "astronaut" in proc.stdout
+
+
+def test_usage_error_is_not_a_traceback(capsys: pytest.CaptureFixture[str]) -> None:
+    code, _, err = _run(["describe", "--format", "xml"], capsys)
+    assert code == 2
+    assert "Traceback" not in err
+
+
+# --------------------------------------------------------------------------------------------
+# bad input: one line naming the file, exit 2
+
+
+def test_missing_image(scene: dict[str, Path], capsys: pytest.CaptureFixture[str]) -> None:
+    missing = scene["left"].with_name("nope.png")
+    code, _, err = _run(_describe(scene, left=missing), capsys)
+    _assert_one_line_error(code, err, "nope.png", "no such file")
+
+
+def test_corrupt_image(
+    scene: dict[str, Path], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    bad = tmp_path / "corrupt.png"
+    bad.write_bytes(b"\x89PNG\r\n\x1a\n" + bytes(range(256)) * 4)
+    code, _, err = _run(_describe(scene, right=bad), capsys)
+    _assert_one_line_error(code, err, "corrupt.png", "cannot be read")
+
+
+def test_empty_image(
+    scene: dict[str, Path], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    empty = tmp_path / "empty.png"
+    empty.write_bytes(b"")
+    code, _, err = _run(_describe(scene, left=empty), capsys)
+    _assert_one_line_error(code, err, "empty.png", "empty")
+
+
+def test_left_and_right_of_different_sizes(
+    scene: dict[str, Path], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    small = cv2.resize(cv2.imread(str(scene["right"])), (320, 240))
+    path = tmp_path / "small_right.png"
+    cv2.imwrite(str(path), small)
+    code, _, err = _run(_describe(scene, right=path), capsys)
+    _assert_one_line_error(code, err, "small_right.png", "320x240")
+
+
+def test_calibration_with_nan(
+    scene: dict[str, Path], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    calib = tmp_path / "nan.json"
+    calib.write_text('{"baseline": NaN, "hfov_deg": 60, "image_size": [640, 480]}')
+    code, _, err = _run(_describe(scene, calib=calib), capsys)
+    _assert_one_line_error(code, err, "nan.json")
+
+
+def test_calibration_with_a_singular_matrix(
+    scene: dict[str, Path], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    k = [[554.0, 0, 320], [0, 554.0, 240], [0, 0, 1]]
+    full = {
+        "image_size": [W, H],
+        "K_left": [[554.0, 0, 320], [0, 0, 240], [0, 0, 1]],  # fy = 0: singular
+        "K_right": k,
+        "dist_left": [0, 0, 0, 0, 0],
+        "dist_right": [0, 0, 0, 0, 0],
+        "R": np.eye(3).tolist(),
+        "T": [-0.12, 0, 0],
+    }
+    calib = tmp_path / "singular.json"
+    calib.write_text(json.dumps(full))
+    code, _, err = _run(_describe(scene, calib=calib), capsys)
+    _assert_one_line_error(code, err, "singular.json", "K_left")
+
+
+def test_calibration_for_another_image_size(
+    scene: dict[str, Path], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    calib = tmp_path / "small.json"
+    calib.write_text(json.dumps({"baseline": 0.12, "hfov_deg": 60, "image_size": [320, 240]}))
+    code, _, err = _run(_describe(scene, calib=calib), capsys)
+    _assert_one_line_error(code, err, "small.json", "320x240")
+
+
+def test_database_that_is_not_ours(
+    scene: dict[str, Path], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    text = tmp_path / "notes.db"
+    text.write_text("these are my notes, not a database\n")
+    code, _, err = _run(_describe(scene, db=text), capsys)
+    _assert_one_line_error(code, err, "notes.db", "not a scenespeak object database")
+    other = tmp_path / "other.db"
+    with sqlite3.connect(other) as conn:
+        conn.execute("CREATE TABLE songs(title TEXT)")
+    code, _, err = _run(_describe(scene, db=other), capsys)
+    _assert_one_line_error(code, err, "other.db")
+
+
+def test_empty_database(
+    scene: dict[str, Path], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from scenespeak.database import ObjectDatabase
+
+    empty = tmp_path / "empty.db"
+    ObjectDatabase.create(empty).close()
+    code, _, err = _run(_describe(scene, db=empty), capsys)
+    _assert_one_line_error(code, err, "empty.db", "no objects")
+
+
+def test_textureless_scene(
+    scene: dict[str, Path], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    gray = np.full((H, W, 3), 128, np.uint8)
+    left = _write(tmp_path / "blank_left.png", gray)
+    right = _write(tmp_path / "blank_right.png", gray)
+    code, _, err = _run(_describe(scene, left=left, right=right), capsys)
+    _assert_one_line_error(code, err, "blank_left.png", "texture")
+
+
+def test_missing_training_image_leaves_the_database_as_it_was(
+    scene: dict[str, Path], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    db = tmp_path / "copy.db"
+    db.write_bytes(scene["db"].read_bytes())
+    before = db.read_bytes()
+    args = ["db", "add", "--db", db, "--label", "cat", scene["train_coffee"], tmp_path / "x.png"]
+    code, _, err = _run(args, capsys)
+    _assert_one_line_error(code, err, "x.png")
+    assert db.read_bytes() == before

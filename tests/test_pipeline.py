@@ -1,0 +1,188 @@
+"""The pipeline end to end: stereo pairs with known object positions → objects and relations.
+
+Two kinds of scenes:
+
+- photo cards: crops of scikit-image's photos pasted as fronto-parallel cards at known places
+  (exactly ``f·B/Z`` pixels apart in the right image) in front of a textured wall. A card is
+  flat, so its visible surface *is* its position: centroids must be within 2 cm.
+- rendered scenes from ``scenespeak.scenes`` (pybullet), level and pitched rig, generated once
+  per session (see the ``rendered`` fixture).
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+import cv2
+import numpy as np
+import pytest
+from skimage import data, transform
+
+from scenespeak.calibration import rig_from_short
+from scenespeak.database import ObjectDatabase
+from scenespeak.errors import DatabaseError, ImageError
+from scenespeak.objects import SceneObject, project_to_plane
+from scenespeak.pipeline import SceneDescription, describe_files, describe_scene
+
+W, H, BASELINE, HFOV = 640, 480, 0.12, 60.0
+FOCAL = (W / 2) / np.tan(np.radians(HFOV / 2))
+
+
+def _photo(name: str, size: tuple[int, int]) -> np.ndarray:
+    img = getattr(data, name)()
+    img = np.stack([img] * 3, -1) if img.ndim == 2 else img[..., :3]
+    return (transform.resize(img, size, anti_aliasing=True) * 255).astype(np.uint8)
+
+
+def card_pair(
+    cards: dict[str, tuple[float, float, float]], seed: int = 0
+) -> tuple[np.ndarray, np.ndarray]:
+    """Left/right images of photo cards ``label → (x, Z, width)`` before a wall 4 m away."""
+    rng = np.random.default_rng(seed)
+    wall = cv2.resize(
+        rng.integers(0, 255, (H // 8, (W + 200) // 8, 3)).astype(np.uint8),
+        (W + 200, H),
+        interpolation=cv2.INTER_LINEAR,
+    )
+    d_wall = round(FOCAL * BASELINE / 4.0)
+    left = wall[:, 100 : 100 + W].copy()
+    right = wall[:, 100 + d_wall : 100 + d_wall + W].copy()
+    for name, (x, z, width) in sorted(cards.items(), key=lambda kv: -kv[1][1]):
+        wpx = round(FOCAL * width / z)
+        u = round(W / 2 + FOCAL * x / z - wpx / 2)
+        v = H // 2 - wpx // 2
+        d = round(FOCAL * BASELINE / z)
+        card = _photo(name, (wpx, wpx))
+        left[v : v + wpx, u : u + wpx] = card
+        right[v : v + wpx, u - d : u - d + wpx] = card
+    return left, right
+
+
+@pytest.fixture(scope="module")
+def card_db(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    path = tmp_path_factory.mktemp("cards") / "objects.db"
+    with ObjectDatabase.create(path) as db:
+        for name in ("astronaut", "chelsea", "coffee"):
+            db.add_object(name, [_photo(name, (240, 240))])
+    return path
+
+
+def _describe(cards: dict[str, tuple[float, float, float]], db_path: Path, **kw: Any) -> Any:
+    left, right = card_pair(cards)
+    rig = rig_from_short(BASELINE, HFOV, (W, H))
+    with ObjectDatabase.open(db_path, readonly=True) as db:
+        return describe_scene(left, right, rig, db, **kw)
+
+
+NEAR = {"astronaut": (-0.25, 1.2, 0.2), "chelsea": (0.22, 1.0, 0.2), "coffee": (0.0, 1.8, 0.25)}
+
+
+def test_cards_are_where_they_were_put(card_db: Path) -> None:
+    desc = _describe(NEAR, card_db, unknown=False)
+    assert isinstance(desc, SceneDescription)
+    assert {o.label for o in desc.objects} == set(NEAR)
+    for obj in desc.objects:
+        x, z, _ = NEAR[obj.label]
+        assert obj.source == "dense"
+        assert obj.plane_centroid == pytest.approx([x, z], abs=0.02), obj.label
+    assert desc.skipped == ()
+    # every ordered pair, with the primary direction of the layout
+    assert len(desc.relations) == 6
+    assert desc.relation("astronaut", "chelsea").primary == "left"
+    assert desc.relation("chelsea", "astronaut").primary == "right"
+    assert desc.relation("coffee", "chelsea").primary == "behind"
+    assert desc.relation("chelsea", "coffee").primary == "front"
+    # the stages are kept
+    assert len(desc.features_left) > 500 and len(desc.point_labels) == len(desc.points)
+    assert {"sift", "label", "stereo", "objects", "relations"} <= set(desc.timings)
+    assert desc.summary.startswith("From left to right: the astronaut")
+
+
+def test_to_dict_is_the_interface_json(card_db: Path) -> None:
+    doc = json.loads(json.dumps(_describe(NEAR, card_db, unknown=False).to_dict()))
+    assert set(doc) >= {"objects", "relations", "skipped"}
+    for o in doc["objects"]:
+        assert set(o) >= {"label", "points", "centroid", "hull"}
+    for r in doc["relations"]:
+        assert set(r) >= {"argument", "referent", "primary", "secondary", "sentence", "f0", "f2"}
+        assert len(r["f0"]) == 180 and len(r["f2"]) == 180
+        # F(B, A) is F(A, B) turned by 180°
+    rel = {(r["argument"], r["referent"]): r for r in doc["relations"]}
+    f_ab = np.array(rel[("astronaut", "chelsea")]["f0"])
+    f_ba = np.array(rel[("chelsea", "astronaut")]["f0"])
+    assert np.allclose(np.roll(f_ab, 90), f_ba)
+
+
+def test_far_small_cards_need_the_dense_region(card_db: Path) -> None:
+    # 15 cm cards 1.7-1.9 m away: ~45 px wide, recognised, but few keypoints match in stereo.
+    far = {"astronaut": (-0.3, 1.9, 0.15), "chelsea": (0.2, 1.0, 0.2), "coffee": (0.1, 1.7, 0.15)}
+    sparse = _describe(far, card_db, dense=False, unknown=False)
+    dense = _describe(far, card_db, dense=True, unknown=False)
+    described_sparse = {o.label for o in sparse.objects}
+    described_dense = {o.label for o in dense.objects}
+    assert described_dense == set(far)
+    assert len(described_sparse) < len(described_dense)
+    missing = set(far) - described_sparse
+    assert {s.label for s in sparse.skipped} == missing
+    assert all("point" in s.reason for s in sparse.skipped)
+    obj = dense.object("astronaut")
+    assert isinstance(obj, SceneObject)
+    assert obj.n_points > 100
+    assert obj.plane_centroid == pytest.approx([-0.3, 1.9], abs=0.03)
+
+
+def test_an_unrecognised_card_becomes_an_unknown_object(card_db: Path) -> None:
+    # A 10 cm astronaut card 1.9 m away is too small to recognise: its points are clustered.
+    cards = {"astronaut": (-0.3, 1.9, 0.1), "chelsea": (0.2, 1.0, 0.2)}
+    desc = _describe(cards, card_db)
+    labels = [o.label for o in desc.objects]
+    assert "chelsea" in labels and "astronaut" not in labels
+    unknown = [o for o in desc.objects if o.label.startswith("unknown object")]
+    assert len(unknown) == 1  # the wall 4 m away is background, not an object
+    assert unknown[0].source == "clustered"
+    assert unknown[0].plane_centroid == pytest.approx([-0.3, 1.9], abs=0.03)
+    assert desc.relation("unknown object 1", "chelsea").primary == "left"
+
+
+def test_textureless_pair_is_an_image_error(card_db: Path) -> None:
+    blank = np.full((H, W), 90, np.uint8)
+    rig = rig_from_short(BASELINE, HFOV, (W, H))
+    with (
+        ObjectDatabase.open(card_db, readonly=True) as db,
+        pytest.raises(ImageError, match="texture"),
+    ):
+        describe_scene(blank, blank, rig, db, sources={"left": "blank.png"})
+
+
+def test_empty_database_is_a_database_error(tmp_path: Path) -> None:
+    path = tmp_path / "empty.db"
+    ObjectDatabase.create(path).close()
+    left, right = card_pair(NEAR)
+    rig = rig_from_short(BASELINE, HFOV, (W, H))
+    with ObjectDatabase.open(path) as db, pytest.raises(DatabaseError, match="no objects"):
+        describe_scene(left, right, rig, db)
+
+
+def test_describe_files_names_the_inputs(card_db: Path, tmp_path: Path) -> None:
+    left, right = card_pair(NEAR)
+    cv2.imwrite(str(tmp_path / "l.png"), cv2.cvtColor(left, cv2.COLOR_RGB2BGR))
+    cv2.imwrite(str(tmp_path / "r.png"), cv2.cvtColor(right, cv2.COLOR_RGB2BGR))
+    (tmp_path / "c.json").write_text(
+        json.dumps({"baseline": BASELINE, "hfov_deg": HFOV, "image_size": [W, H]})
+    )
+    desc = describe_files(tmp_path / "l.png", tmp_path / "r.png", tmp_path / "c.json", card_db)
+    assert desc.sources["left"].endswith("l.png")
+    assert {o.label for o in desc.objects} >= set(NEAR)
+    text = desc.to_text()
+    assert text.count("\n") + 1 >= 6
+    assert "The astronaut is" in text
+
+
+# --------------------------------------------------------------------------------------------
+# rendered scenes (scenespeak.scenes)
+
+
+def _truth_xy(obj: dict[str, Any], up: np.ndarray) -> np.ndarray:
+    return project_to_plane(np.asarray(obj["centroid"], float)[None], up)[0]
