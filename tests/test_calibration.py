@@ -370,3 +370,11 @@ def test_ground_basis_is_orthonormal_and_horizontal(up: tuple[float, float, floa
 def test_ground_basis_rejects_nan() -> None:
     with pytest.raises(CalibrationError, match="up"):
         ground_basis([float("nan"), -1, 0])
+
+
+def test_rotation_vector_is_accepted(tmp_path: Path) -> None:
+    rig = _unrectified_rig()
+    d = rig.to_dict()
+    d["R"] = cv2.Rodrigues(rig.R)[0].ravel().tolist()
+    (tmp_path / "c.json").write_text(json.dumps(d))
+    assert load_rig(tmp_path / "c.json").allclose(rig, atol=1e-9)

@@ -141,10 +141,15 @@ def test_describe_json_follows_the_interface(
     assert doc["skipped"] == []
 
 
-def test_describe_text(scene: dict[str, Path], capsys: pytest.CaptureFixture[str]) -> None:
-    code, out, _ = _run(_describe(scene), capsys)
+def test_describe_text_and_figures(
+    scene: dict[str, Path], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    figures = tmp_path / "figures"
+    code, out, _ = _run([*_describe(scene), "--figures", figures], capsys)
     assert code == 0
     assert "The astronaut is" in out and "of the coffee" in out
+    pngs = sorted(p.name for p in figures.glob("*.png"))
+    assert {"hulls.png", "histograms.png", "matches.png"} <= set(pngs)
 
 
 def test_points_json_and_ply(

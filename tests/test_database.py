@@ -533,3 +533,25 @@ def test_labelling_with_ivf_index(built_db: Path, scene: Scene) -> None:
     with ObjectDatabase.open(built_db, readonly=True, index="ivf") as db:
         result = db.label(scene.features)
     assert {d.label for d in result.detections} == {"astronaut", "coffee", "cat"}
+
+
+def test_quantiser_is_cached_in_the_file(db_copy: Path, scene: Scene) -> None:
+    with ObjectDatabase.open(db_copy, index="ivf") as db:
+        gen = db.generation()
+        db.load(seed=0)
+        first = db.index
+        assert isinstance(first, IVFIndex)
+        assert db.generation() == gen  # caching is not a change of the objects
+    with ObjectDatabase.open(db_copy, readonly=True, index="ivf") as db:
+        db.load(seed=1)  # a different seed would train other centroids: the cache is used
+        second = db.index
+        assert isinstance(second, IVFIndex)
+        np.testing.assert_array_equal(second.centroids, first.centroids)
+        np.testing.assert_array_equal(second.cells(), first.cells())
+    with ObjectDatabase.open(db_copy, index="ivf") as db:
+        db.add_object("rocket 2", [scene.objects["rocket"][::-1]])
+        db.load(seed=1)  # the objects changed: the cache is stale and not used
+        third = db.index
+        assert isinstance(third, IVFIndex)
+        assert third.ntotal > first.ntotal
+        assert not np.array_equal(third.centroids[: first.nlist], first.centroids)

@@ -206,6 +206,25 @@ def test_layout_overlap_but_direction() -> None:
     assert rel.sentence == "The coin is mostly to the left of the tray."
 
 
+def test_touching_objects_use_the_hybrid_histogram() -> None:
+    rel = relate(rect(0, 0, 1, 1), rect(1, 0, 2, 1), argument="book", referent="box")
+    assert rel.hybrid and rel.overlap == 0.0
+    assert rel.sentence == "The book is directly to the left of the box."
+
+
+def test_overlap_areas() -> None:
+    from scenespeak._language_geometry import intersection_area
+
+    sq = rect(0, 0, 2, 2)
+    assert intersection_area(rect(1, 1, 3, 3), sq) == pytest.approx(1.0)
+    # Non-convex on both sides: the grid estimate (U-shape and an L-shape).
+    u = np.array([[0, 0], [3, 0], [3, 3], [2, 3], [2, 1], [1, 1], [1, 3], [0, 3]], float)
+    ell = np.array([[0.5, 0.5], [2.5, 0.5], [2.5, 0.8], [0.8, 0.8], [0.8, 2.5], [0.5, 2.5]])
+    exact = 0.3 * (2.5 - 0.5) + 0.3 * (2.5 - 0.8)  # the L lies wholly in the U's base and wall
+    assert intersection_area(ell, u) == pytest.approx(exact, rel=0.02)
+    assert intersection_area(ell + np.array([1.0, 0.0]), u) < 0.9 * exact
+
+
 def test_layout_table_sentences() -> None:
     table = layout_table()
     for *_, sentence in SEED:
@@ -539,6 +558,15 @@ def test_relate_errors() -> None:
         relate(cup_at(0), BOX, argument="")
     with pytest.raises(InputError, match="vertical"):
         describe_relation(np.ones(180), np.ones(180), vertical="beside")
+
+
+def test_docs_table_is_current() -> None:
+    from pathlib import Path
+
+    doc = Path(__file__).resolve().parents[1] / "docs" / "language.md"
+    text = doc.read_text(encoding="utf-8")
+    # Regenerate with: python -m scenespeak.language --update-doc docs/language.md
+    assert language.update_doc_table(text) == text
 
 
 def test_cli_table(capsys: pytest.CaptureFixture[str]) -> None:

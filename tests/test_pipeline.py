@@ -143,7 +143,8 @@ def test_an_unrecognised_card_becomes_an_unknown_object(card_db: Path) -> None:
     assert len(unknown) == 1  # the wall 4 m away is background, not an object
     assert unknown[0].source == "clustered"
     assert unknown[0].plane_centroid == pytest.approx([-0.3, 1.9], abs=0.03)
-    assert desc.relation("unknown object 1", "chelsea").primary == "left"
+    rel = desc.relation("unknown object 1", "chelsea")
+    assert (rel.primary, rel.secondary) == ("behind", "left")  # 0.9 m behind, 0.5 m left
 
 
 def test_textureless_pair_is_an_image_error(card_db: Path) -> None:

@@ -395,3 +395,13 @@ def test_unrectified_rig_end_to_end_on_a_plane() -> None:
     c = np.rint(left_xy).astype(int)
     assert mask[np.clip(c[:, 1], 0, 479), np.clip(c[:, 0], 0, 639)].mean() > 0.99
     assert np.median(np.abs((xyz @ rect.R1.T)[:, 2] - z0)) < 0.005 * z0
+
+
+def test_match_stereo_with_dense_reproduces_stereo_points(moto_result: StereoResult) -> None:
+    r = moto_result
+    m = match_stereo(r.features_left, r.features_right, r.rect, dense=r.dense)
+    np.testing.assert_array_equal(m.left_index, r.points.left_index)
+    np.testing.assert_array_equal(m.right_index, r.points.right_index)
+    # the band search alone finds more (and worse) matches; the dense check thins them
+    band = match_stereo(r.features_left, r.features_right, r.rect, search="band", ratio=0.8)
+    assert len(band) > len(m) + 100

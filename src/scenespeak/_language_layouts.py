@@ -83,10 +83,12 @@ class Layout:
     b: NDArray[np.float64]
     a_heights: NDArray[np.float64] | None = None
     b_heights: NDArray[np.float64] | None = None
+    others: tuple[tuple[str, NDArray[np.float64]], ...] = ()
 
 
 def _pair(name: str, note: str, scene: dict[str, NDArray[np.float64]], a: str, b: str) -> Layout:
-    return Layout(name, note, a, b, scene[a], scene[b])
+    rest = tuple((k, v) for k, v in scene.items() if k not in (a, b))
+    return Layout(name, note, a, b, scene[a], scene[b], others=rest)
 
 
 _B = disc(0.0, 1.0, 0.05)
@@ -114,6 +116,7 @@ LAYOUTS: tuple[Layout, ...] = (
         FIG11["can"],
         FIG11_HEIGHTS["mug"],
         FIG11_HEIGHTS["can"],
+        others=(("hat", FIG11["hat"]),),
     ),
     Layout("right", "0° off", "cup", "box", _at(0.0), _B),
     Layout("behind", "0° off", "cup", "box", _at(90.0), _B),

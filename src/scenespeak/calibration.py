@@ -414,7 +414,8 @@ def rig_from_mapping(
         Either the short form (``baseline``, ``hfov_deg``, ``image_size``, optional ``up``) or
         the full form (``K_left``/``K1``/``M1``, ``K_right``/``K2``/``M2``, ``dist_left``/``D1``,
         ``dist_right``/``D2``, ``R``, ``T``, image size, optional ``up``). Matrices may be nested
-        lists, flat lists or ``{rows, cols, data}`` mappings.
+        lists, flat lists or ``{rows, cols, data}`` mappings; ``R`` may also be a rotation
+        vector (3 numbers, OpenCV's Rodrigues form).
     source : str
         Name used in error messages.
     image_size : (w, h), optional
@@ -441,13 +442,19 @@ def rig_from_mapping(
             alias = " / ".join(_ALIASES[key])
             raise CalibrationError(source, f'missing key "{key}" (accepted names: {alias})')
     size = _size_from_mapping(d, source, image_size)
+    r_value = values["R"]
+    if isinstance(r_value, Mapping) and "data" in r_value:
+        r_value = r_value["data"]
+    if np.size(np.asarray(r_value, dtype=object)) == 3:  # a rotation vector (Rodrigues)
+        rvec = _as_matrix(r_value, (3,), "R", source)
+        r_value = cv2.Rodrigues(rvec)[0]
     return StereoRig(
         size,
         _as_matrix(values["K_left"], (3, 3), "K_left", source),
         _as_matrix(values["K_right"], (3, 3), "K_right", source),
         _as_dist(values["dist_left"], "dist_left", source),
         _as_dist(values["dist_right"], "dist_right", source),
-        _as_matrix(values["R"], (3, 3), "R", source),
+        _as_matrix(r_value, (3, 3), "R", source),
         _as_matrix(values["T"], (3,), "T", source),
         _as_up(values["up"], source),
         source,
@@ -507,15 +514,14 @@ def _parse_opencv_xml(p: Path) -> dict[str, Any]:
         out: dict[str, Any] = {}
         for key in root.keys():
             node = fs.getNode(key)
-            if node.isMap() and node.mat() is not None:  # pragma: no cover - matrices below
-                out[key] = node.mat()
-            elif node.isSeq():
+            if node.isSeq():
                 out[key] = [node.at(i).real() for i in range(node.size())]
-            elif node.isReal() or node.isInt():
+            elif node.isInt() or node.isReal():
                 out[key] = node.real()
+            elif node.isString():
+                out[key] = node.string()
             else:
-                mat = node.mat()
-                out[key] = mat if mat is not None else node.string()
+                out[key] = node.mat()
         return out
     finally:
         fs.release()

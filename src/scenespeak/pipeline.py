@@ -42,6 +42,7 @@ from scenespeak.features import detect, to_gray
 from scenespeak.objects import SceneObject, Skipped, build_objects, make_object
 
 __all__ = [
+    "PairRelation",
     "PipelineOptions",
     "SceneDescription",
     "database_from_dataset",
@@ -100,6 +101,46 @@ class PipelineOptions:
 
 
 @dataclass(frozen=True, eq=False)
+class PairRelation:
+    """The relation of one ordered pair with the force histograms it was decided from.
+
+    Attributes
+    ----------
+    relation : Relation
+        The words and numbers of :mod:`scenespeak.language` (``primary``, ``secondary``,
+        ``sentence``, ``hedge``, ``vertical``, ...; also readable directly on this object).
+    f0, f2 : (directions,) float64
+        F0 and F2 of the argument relative to the referent; ``f2`` is the hybrid F02 where F2 is
+        undefined (touching or overlapping hulls, ``relation.hybrid``).
+    """
+
+    relation: Any
+    f0: NDArray[np.float64]
+    f2: NDArray[np.float64]
+
+    def __getattr__(self, name: str) -> Any:
+        # Only called for names that are not fields: read them from the Relation.
+        if name.startswith("__") or name in ("relation", "f0", "f2"):
+            raise AttributeError(name)
+        return getattr(self.relation, name)
+
+    def to_dict(self) -> dict[str, Any]:
+        """The ``relations`` entry of ``interfaces.md`` plus :meth:`Relation.to_dict`'s extras."""
+        rel = self.relation
+        head: dict[str, Any] = {
+            "argument": rel.argument,
+            "referent": rel.referent,
+            "primary": rel.primary,
+            "secondary": rel.secondary,
+            "sentence": rel.sentence,
+            "f0": [float(v) for v in self.f0],
+            "f2": [float(v) for v in self.f2],
+        }
+        head.update({k: v for k, v in rel.to_dict().items() if k not in head})
+        return head
+
+
+@dataclass(frozen=True, eq=False)
 class SceneDescription:
     """Everything :func:`describe_scene` computed, stage by stage.
 
@@ -123,10 +164,8 @@ class SceneDescription:
         Described objects.
     skipped : tuple of Skipped
         Objects that could not be described, with the reason.
-    relations : tuple of Relation
-        Every ordered pair of described objects.
-    histograms : dict of (str, str) to (f0, f2)
-        The force histograms of each ordered pair (f2 is the hybrid F02 where F2 is undefined).
+    relations : tuple of PairRelation
+        Every ordered pair of described objects: the Relation and its histograms.
     summary : str
         A short paragraph about the scene ("" without objects or when switched off).
     timings : dict of str to float
@@ -146,8 +185,7 @@ class SceneDescription:
     labelling: Any
     objects: tuple[SceneObject, ...]
     skipped: tuple[Skipped, ...]
-    relations: tuple[Any, ...]
-    histograms: Mapping[tuple[str, str], tuple[NDArray[np.float64], NDArray[np.float64]]]
+    relations: tuple[PairRelation, ...]
     summary: str = ""
     timings: Mapping[str, float] = field(default_factory=dict)
     sources: Mapping[str, str] = field(default_factory=dict)
@@ -169,7 +207,7 @@ class SceneDescription:
                 return obj
         return None
 
-    def relation(self, argument: str, referent: str) -> Any:
+    def relation(self, argument: str, referent: str) -> PairRelation | None:
         """The relation of ``argument`` to ``referent``, or None."""
         for rel in self.relations:
             if rel.argument == argument and rel.referent == referent:
@@ -198,21 +236,7 @@ class SceneDescription:
                     "height_range": [float(o.heights.min()), float(o.heights.max())],
                 }
             )
-        relations = []
-        for rel in self.relations:
-            d = rel.to_dict()
-            f0, f2 = self.histograms[(rel.argument, rel.referent)]
-            head = {
-                "argument": rel.argument,
-                "referent": rel.referent,
-                "primary": rel.primary,
-                "secondary": rel.secondary,
-                "sentence": rel.sentence,
-                "f0": [float(v) for v in f0],
-                "f2": [float(v) for v in f2],
-            }
-            head.update({k: v for k, v in d.items() if k not in head})
-            relations.append(head)
+        relations = [rel.to_dict() for rel in self.relations]
         return {
             "objects": objects,
             "relations": relations,
@@ -265,9 +289,7 @@ def _points_inside(xy: NDArray[np.float64], mask: NDArray[np.bool_]) -> NDArray[
     return inside & mask[r, c]
 
 
-def _relate_all(
-    objects: tuple[SceneObject, ...], directions: int
-) -> tuple[list[Any], dict[tuple[str, str], tuple[NDArray[np.float64], NDArray[np.float64]]]]:
+def _relate_all(objects: tuple[SceneObject, ...], directions: int) -> list[PairRelation]:
     """Every ordered pair through the force histograms and the rule base.
 
     ``language.relate`` does not return the histograms the JSON must carry, so the same steps
@@ -277,8 +299,7 @@ def _relate_all(
     """
     from scenespeak import forces, language
 
-    relations: list[Any] = []
-    hists: dict[tuple[str, str], tuple[NDArray[np.float64], NDArray[np.float64]]] = {}
+    relations: list[PairRelation] = []
     n = len(objects)
     half = directions // 2
     for i in range(n):
@@ -323,11 +344,10 @@ def _relate_all(
                     vertical=vertical,
                     hybrid=hybrid,
                 )
-                relations.append(rel)
-                hists[(arg.label, ref.label)] = (h0, h2)
+                relations.append(PairRelation(rel, h0, h2))
     order = {(o.label): k for k, o in enumerate(objects)}
     relations.sort(key=lambda r: (order[r.argument], order[r.referent]))
-    return relations, hists
+    return relations
 
 
 def describe_scene(
@@ -428,13 +448,14 @@ def describe_scene(
 
     say("relations")
     with _timed(timings, "relations"):
-        relations, hists = _relate_all(objects, opts.directions)
+        relations = _relate_all(objects, opts.directions)
         summary = ""
         if opts.summary and relations:
             from scenespeak.language import summarize_scene
 
             summary = summarize_scene(
-                relations, centroids={o.label: o.plane_centroid for o in objects}
+                [r.relation for r in relations],
+                centroids={o.label: o.plane_centroid for o in objects},
             )
 
     return SceneDescription(
@@ -450,7 +471,6 @@ def describe_scene(
         objects=objects,
         skipped=tuple(skipped),
         relations=tuple(relations),
-        histograms=hists,
         summary=summary,
         timings=timings,
         sources=src,
@@ -480,7 +500,11 @@ def _objects(
     objects: list[SceneObject] = []
     skipped: list[Skipped] = []
     masks = {d.label: _outline_mask(d.outline_in_scene, shape) for d in labelling.detections}
-    dense_xyz = _dense_regions(left, right, result, masks) if opts.dense else {}
+    dense_xyz = (
+        _dense_regions(left, right, result, _visible_parts(masks, points, labels_arr))
+        if opts.dense
+        else {}
+    )
     for det in labelling.detections:
         name = det.label
         claimed |= _points_inside(points.left_xy, masks[name])
@@ -520,6 +544,33 @@ def _objects(
         objects.extend(extra)
         skipped.extend(extra_skipped)
     return tuple(objects), skipped
+
+
+def _visible_parts(
+    masks: Mapping[str, NDArray[np.bool_]], points: Any, labels_arr: NDArray[np.object_]
+) -> dict[str, NDArray[np.bool_]]:
+    """Each outline minus the outlines of recognised objects in front of it.
+
+    A carried outline covers the whole object, also where a nearer object hides it; those
+    pixels would give the nearer object's depth. Objects are ordered by the median disparity
+    of their labelled keypoints (larger is nearer); an object without keypoints keeps its
+    outline whole.
+    """
+    disparity = np.asarray(points.disparity, dtype=np.float64)
+    near = {
+        name: float(np.median(disparity[labels_arr == name]))
+        for name in masks
+        if np.any(labels_arr == name)
+    }
+    out: dict[str, NDArray[np.bool_]] = {}
+    for name, mask in masks.items():
+        visible = mask.copy()
+        if name in near:
+            for other, d in near.items():
+                if other != name and d > near[name]:
+                    visible &= ~masks[other]
+        out[name] = visible
+    return out
 
 
 def _with_note(obj: SceneObject, note: str) -> SceneObject:

@@ -357,6 +357,54 @@ def _global_block(
     g_back[better] = cmin[better] + s
 
 
+def _band_pairs(
+    dl: NDArray[np.float32],
+    dr: NDArray[np.float32],
+    lrect: NDArray[np.float64],
+    rrect: NDArray[np.float64],
+    band_px: float,
+    lo_disp: float,
+    hi_disp: float | None,
+    chunk: int = 256,
+) -> tuple[NDArray[np.intp], NDArray[np.intp], NDArray[np.float32]]:
+    """All (left, right, distance) pairs inside the epipolar band and disparity range.
+
+    Left keypoints are taken in row order in blocks; each block is compared only with the right
+    keypoints in its band of rows (a slice of the row-sorted right keypoints), so the cost is a
+    fraction of the full distance matrix.
+    """
+    nl = len(dl)
+    lo_order = np.argsort(lrect[:, 1], kind="stable")
+    ro = np.argsort(rrect[:, 1], kind="stable")
+    ry = rrect[ro, 1]
+    drs = dr[ro]
+    rns = (drs * drs).sum(1)
+    pi: list[NDArray[np.intp]] = []
+    pj: list[NDArray[np.intp]] = []
+    pd: list[NDArray[np.float32]] = []
+    for s in range(0, nl, chunk):
+        li = lo_order[s : s + chunk]
+        ly = lrect[li, 1]
+        a = int(np.searchsorted(ry, ly.min() - band_px, "left"))
+        b = int(np.searchsorted(ry, ly.max() + band_px, "right"))
+        if b <= a:
+            continue
+        q = dl[li]
+        sq = (q * q).sum(1)[:, None] + rns[None, a:b] - 2.0 * (q @ drs[a:b].T)
+        ok = np.abs(ly[:, None] - ry[None, a:b]) <= band_px
+        dsp = lrect[li, 0][:, None] - rrect[ro[a:b], 0][None, :]
+        ok &= dsp > lo_disp
+        if hi_disp is not None:
+            ok &= dsp <= hi_disp
+        ii, jj = np.nonzero(ok)
+        pi.append(li[ii])
+        pj.append(ro[a + jj])
+        pd.append(np.sqrt(np.maximum(sq[ii, jj], 0.0)).astype(np.float32))
+    if not pi:
+        return np.zeros(0, np.intp), np.zeros(0, np.intp), np.zeros(0, np.float32)
+    return np.concatenate(pi), np.concatenate(pj), np.concatenate(pd)
+
+
 def _candidates(
     fl: Features,
     fr: Features,
@@ -367,61 +415,40 @@ def _candidates(
     *,
     need_global: bool = True,
 ) -> _Candidates:
-    """Global and in-band nearest neighbours, from one blocked distance matrix.
+    """Global and in-band nearest neighbours.
 
-    The global search keeps the ``k`` nearest right descriptors of each left one; the band
-    search gathers only the pairs inside the epipolar band (right keypoints sorted by row,
-    ``searchsorted``), so it costs little beyond the matrix product.
+    The global search (blocked full distance matrix) keeps the ``k`` nearest right descriptors
+    of each left one and the best left one of each right one; the band search compares each
+    left keypoint only with the right keypoints in its band of rows.
     """
     lrect = rect.rectify_points(fl.xy, "left")
     rrect = rect.rectify_points(fr.xy, "right")
     nl, nr = len(fl), len(fr)
     dl = fl.descriptors.astype(np.float32)
     dr = fr.descriptors.astype(np.float32)
-    rn = (dr * dr).sum(1)
-    k = min(4, nr)
     g_best = np.zeros(nl, np.intp)
     g_d1 = np.full(nl, np.inf, np.float32)
     g_d2 = np.full(nl, np.inf, np.float32)
     col_g = np.full(nr, np.inf, np.float32)
     g_back = np.zeros(nr, np.intp)
-    ry_order = np.argsort(rrect[:, 1], kind="stable")
-    ry_sorted = rrect[ry_order, 1]
-    doffs = rect.doffs
-    pi: list[NDArray[np.intp]] = []
-    pj: list[NDArray[np.intp]] = []
-    pd: list[NDArray[np.float32]] = []
-    for s in range(0, nl, _CHUNK):
-        e = min(nl, s + _CHUNK)
-        q = dl[s:e]
-        sq = (q * q).sum(1)[:, None] + rn[None, :] - 2.0 * (q @ dr.T)
-        np.maximum(sq, 0.0, out=sq)
-        rows = np.arange(e - s)
-        if need_global:
+    if need_global:
+        rn = (dr * dr).sum(1)
+        k = min(4, nr)
+        for s in range(0, nl, _CHUNK):
+            q = dl[s : s + _CHUNK]
+            sq = (q * q).sum(1)[:, None] + rn[None, :] - 2.0 * (q @ dr.T)
+            np.maximum(sq, 0.0, out=sq)
             _global_block(sq, s, k, fr.xy, g_best, g_d1, g_d2, col_g, g_back)
-        # pairs inside the band
-        lo = np.searchsorted(ry_sorted, lrect[s:e, 1] - band_px, "left")
-        hi = np.searchsorted(ry_sorted, lrect[s:e, 1] + band_px, "right")
-        cnt = hi - lo
-        tot = int(cnt.sum())
-        if tot == 0:
-            continue
-        ii = np.repeat(rows, cnt)
-        start = np.repeat(lo - np.cumsum(np.r_[0, cnt[:-1]]), cnt)
-        jj = ry_order[start + np.arange(tot)]
-        dsp = lrect[s + ii, 0] - rrect[jj, 0] + doffs
-        ok = dsp > min_disparity
-        if max_disparity is not None:
-            ok &= dsp <= max_disparity
-        ii, jj = ii[ok], jj[ok]
-        pi.append(ii + s)
-        pj.append(jj)
-        pd.append(np.sqrt(sq[ii, jj]).astype(np.float32))
-    if pi:
-        bi, bj, bd = np.concatenate(pi), np.concatenate(pj), np.concatenate(pd)
-    else:
-        bi = bj = np.zeros(0, np.intp)
-        bd = np.zeros(0, np.float32)
+    doffs = rect.doffs
+    bi, bj, bd = _band_pairs(
+        dl,
+        dr,
+        lrect,
+        rrect,
+        band_px,
+        min_disparity - doffs,
+        None if max_disparity is None else max_disparity - doffs,
+    )
     b_best, b_d1, b_d2 = _group_best(bi, bj, bd, nl, fr.xy)
     b_back, _, _ = _group_best(bj, bi, bd, nr, fl.xy)
     return _Candidates(g_best, g_d1, g_d2, b_best, b_d1, b_d2, g_back, b_back, lrect, rrect)
@@ -551,20 +578,18 @@ def match_stereo(
     if not 0.0 < ratio <= 1.0:
         raise ValueError(f"ratio must be in (0, 1], got {ratio}")
     if len(features_left) == 0 or len(features_right) == 0:
-        return _select(
-            _empty_candidates(len(features_left), len(features_right)),
-            features_left,
-            rect,
-            search="global",
-            ratio=ratio,
-            band_px=band_px,
-            min_disparity=min_disparity,
-            max_disparity=max_disparity,
-            mutual=False,
-        )
-    cand = _candidates(features_left, features_right, rect, band_px, min_disparity, max_disparity)
+        return _no_matches()
     mode: Literal["global", "band"] = (
         ("band" if dense is not None else "global") if search == "auto" else search
+    )
+    cand = _candidates(
+        features_left,
+        features_right,
+        rect,
+        band_px,
+        min_disparity,
+        max_disparity,
+        need_global=mode == "global",
     )
     m = _select(
         cand,
@@ -582,12 +607,10 @@ def match_stereo(
     return m
 
 
-def _empty_candidates(nl: int, nr: int) -> _Candidates:
+def _no_matches() -> StereoMatches:
     z = np.zeros(0, np.intp)
     zf = np.zeros(0, np.float32)
-    return _Candidates(
-        np.zeros(nl, np.intp)[:0], zf, zf, z, zf, zf, z, z, np.zeros((0, 2)), np.zeros((0, 2))
-    )
+    return StereoMatches(z, z.copy(), np.zeros((0, 2)), np.zeros((0, 2)), zf, zf.copy())
 
 
 # --------------------------------------------------------------------------------------------
@@ -637,16 +660,24 @@ def _disparity_range(
 ) -> tuple[int, int]:
     """(minDisparity, numDisparities) for SGBM from keypoint disparities, or a default."""
     w = rect.rig.image_size[0]
-    if disparities is not None and len(disparities) >= 5:
-        lo = float(np.percentile(disparities, 1)) - margin
-        hi = float(np.percentile(disparities, 99)) + margin
+    d = None
+    if disparities is not None and len(disparities) >= 3:
+        # the range of the disparities that at least 3 matches share (within 2 px): isolated
+        # mismatches do not widen it, a near object with a few keypoints stays inside
+        srt = np.sort(np.asarray(disparities, dtype=np.float64))
+        support = np.searchsorted(srt, srt + 2.0, "right") - np.searchsorted(srt, srt - 2.0)
+        d = srt[support >= 3]
+    if d is not None and len(d):
+        lo = float(d.min()) - margin
+        hi = float(d.max()) + margin
     else:
         # everything from 0.3 m to infinity, capped at half the image width
         lo = -rect.doffs
         hi = lo + min(w / 2.0, rect.focal * rect.baseline / 0.3)
     lo = max(lo, -rect.doffs)  # nothing behind infinity
     mn = math.floor(lo)
-    num = int(16 * math.ceil(max(hi - mn, 16.0) / 16.0))
+    span = min(max(hi - mn, 16.0), max(64.0, w / 2.0))  # at most half the image width
+    num = int(16 * math.ceil(span / 16.0))
     return mn, num
 
 
@@ -670,8 +701,9 @@ def dense_disparity(
         The input images as given (gray or colour); they are rectified here if needed.
     rect : Rectification
     min_disparity, num_disparities : int, optional
-        Search range; by default derived from ``keypoint_disparities`` (1st–99th percentile
-        ± 8 px) or, without them, from 0.3 m to infinity.
+        Search range; by default derived from ``keypoint_disparities`` (the range of the values
+        shared by at least 3 of them within 2 px, ± 8 px, at most half the image width) or,
+        without them, from 0.3 m to infinity.
     keypoint_disparities : array, optional
         Rectified disparities of sparse matches, to narrow the search (faster, fewer errors).
     block_size : int
@@ -865,7 +897,7 @@ def stereo_points(
         else:
             m = _select(cand, fl, rect, search="global", ratio=ratio, **kw)
     else:
-        m = match_stereo(fl, fr, rect, ratio=ratio, band_px=band_px)
+        m = _no_matches()
     if len(m) < min_points:
         raise ImageError(
             f"{left_name}, {right_name}",

@@ -1,0 +1,136 @@
+"""Benchmark of the Histogram of Forces engine (``scenespeak.forces``).
+
+Prints median wall-clock times (one process, one thread) of F0 + F2:
+
+* two convex 30-vertex polygons at 180 directions (target: <= 0.5 ms),
+* two non-convex (star-shaped) 200-vertex polygons at 180 directions,
+* two 512 x 512 boolean masks (Matsakis & Wendling's C raster code: ~53 ms per histogram),
+* how the time scales with the vertex count and with the number of directions.
+
+"F0+F2" is timed two ways: two calls of ``force_histogram`` (r=0, then r=2), and one call of
+``force_histograms`` (both exponents sharing the validation and the sweep).
+
+The machine may be shared: medians over many repeats are printed together with the load
+average, and should be read with it.
+
+Run::
+
+    python benchmarks/bench_forces.py            # full run (about a minute)
+    python benchmarks/bench_forces.py --quick    # fewer repeats
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import statistics
+import time
+from collections.abc import Callable
+
+import numpy as np
+from numpy.typing import NDArray
+from skimage.draw import polygon as raster_polygon
+
+from scenespeak.forces import force_histogram, force_histograms, hybrid_histogram
+
+Array = NDArray[np.float64]
+
+
+def convex(n: int, centre: tuple[float, float], radius: float, phase: float = 0.0) -> Array:
+    """A convex polygon with ``n`` vertices on an ellipse."""
+    a = phase + 2 * np.pi * np.arange(n) / n
+    return np.column_stack([centre[0] + radius * np.cos(a), centre[1] + 0.7 * radius * np.sin(a)])
+
+
+def star(n: int, centre: tuple[float, float], radius: float, seed: int) -> Array:
+    """A non-convex star-shaped polygon: sorted random angles, random radii."""
+    rng = np.random.default_rng(seed)
+    ang = np.sort(rng.uniform(0, 2 * np.pi, n))
+    rad = rng.uniform(0.5 * radius, radius, n)
+    return np.column_stack([centre[0] + rad * np.cos(ang), centre[1] + rad * np.sin(ang)])
+
+
+def median_ms(fn: Callable[[], object], repeat: int) -> float:
+    fn()  # warm-up (imports, caches)
+    times = []
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        fn()
+        times.append(time.perf_counter() - t0)
+    return 1e3 * statistics.median(times)
+
+
+def f0_f2_calls(a: object, b: object, directions: int = 180) -> Callable[[], object]:
+    return lambda: (
+        force_histogram(a, b, r=0.0, directions=directions),
+        force_histogram(a, b, r=2.0, directions=directions),
+    )
+
+
+def f0_f2_shared(a: object, b: object, directions: int = 180) -> Callable[[], object]:
+    return lambda: force_histograms(a, b, r=(0.0, 2.0), directions=directions)
+
+
+def masks() -> tuple[NDArray[np.bool_], NDArray[np.bool_]]:
+    """Two 512 x 512 masks: a rasterised 60-vertex star and a disc-like blob."""
+    shape = (512, 512)
+    a = np.zeros(shape, bool)
+    b = np.zeros(shape, bool)
+    pa = star(60, (150.0, -200.0), 110.0, seed=1)
+    rr, cc = raster_polygon(-pa[:, 1], pa[:, 0], shape)
+    a[rr, cc] = True
+    pb = convex(90, (370.0, -330.0), 100.0)
+    rr, cc = raster_polygon(-pb[:, 1], pb[:, 0], shape)
+    b[rr, cc] = True
+    return a, b
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--quick", action="store_true", help="fewer repeats")
+    args = parser.parse_args()
+    rep_small = 40 if args.quick else 200
+    rep_big = 5 if args.quick else 21
+
+    print(f"load average before: {' '.join(f'{x:.2f}' for x in os.getloadavg())}")
+    print(f"numpy {np.__version__}, 1 process; medians of repeated runs, in ms\n")
+
+    a30, b30 = convex(30, (0.0, 0.0), 1.0), convex(30, (3.0, 1.0), 1.2, 0.1)
+    a200, b200 = star(200, (0.0, 0.0), 1.0, seed=2), star(200, (2.6, 0.8), 1.2, seed=3)
+    ma, mb = masks()
+
+    print("| case | F0+F2, two calls | F0+F2, force_histograms | F02 (hybrid) |")
+    print("| --- | ---: | ---: | ---: |")
+    for name, a, b, rep in (
+        ("convex 30 + 30 vertices, 180 directions", a30, b30, rep_small),
+        ("non-convex 200 + 200 vertices, 180 directions", a200, b200, rep_big),
+        ("512 x 512 masks, 180 directions", ma, mb, rep_big),
+    ):
+        two = median_ms(f0_f2_calls(a, b), rep)
+        shared = median_ms(f0_f2_shared(a, b), rep)
+        hyb = median_ms(lambda a=a, b=b: hybrid_histogram(a, b), rep)
+        print(f"| {name} | {two:.3f} | {shared:.3f} | {hyb:.3f} |")
+
+    print("\nScaling with the vertex count (each polygon), 180 directions, F0+F2 two calls:\n")
+    print("| vertices | convex | non-convex (star) |")
+    print("| ---: | ---: | ---: |")
+    for n in (8, 16, 30, 60, 120, 250, 500):
+        rep = rep_small if n <= 60 else rep_big
+        t_convex = median_ms(f0_f2_calls(convex(n, (0, 0), 1.0), convex(n, (3, 1), 1.2, 0.1)), rep)
+        t_star = median_ms(f0_f2_calls(star(n, (0, 0), 1.0, 2), star(n, (2.6, 0.8), 1.2, 3)), rep)
+        print(f"| {n} | {t_convex:.3f} | {t_star:.3f} |")
+
+    print("\nScaling with the number of directions, F0+F2 two calls:\n")
+    print("| directions | convex 30 | star 200 | masks 512² |")
+    print("| ---: | ---: | ---: | ---: |")
+    for d in (36, 90, 180, 360, 720):
+        t30 = median_ms(f0_f2_calls(a30, b30, d), rep_small)
+        t200 = median_ms(f0_f2_calls(a200, b200, d), rep_big)
+        tm = median_ms(f0_f2_calls(ma, mb, d), rep_big)
+        print(f"| {d} | {t30:.3f} | {t200:.3f} | {tm:.3f} |")
+
+    print(f"\nload average after: {' '.join(f'{x:.2f}' for x in os.getloadavg())}")
+
+
+if __name__ == "__main__":
+    main()
