@@ -308,3 +308,21 @@ def test_missing_training_image_leaves_the_database_as_it_was(
     code, _, err = _run(args, capsys)
     _assert_one_line_error(code, err, "x.png")
     assert db.read_bytes() == before
+
+
+# --------------------------------------------------------------------------------------------
+# rendered scenes (need scenespeak.scenes and pybullet)
+
+
+def test_demo_prints_sentences(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    pytest.importorskip("scenespeak.scenes")
+    code, out, err = _run(["demo", tmp_path / "demo", "--quiet"], capsys)
+    assert code == 0, err
+    assert (tmp_path / "demo" / "scene_000" / "left.png").exists()
+    assert (tmp_path / "demo" / "objects.db").exists()
+    sentences = [line for line in out.splitlines() if line.startswith("The ")]
+    assert sentences, out
+    assert all(s.endswith(".") for s in sentences)
+    meta = json.loads((tmp_path / "demo" / "dataset.json").read_text())
+    labels = [o["label"] for o in meta["objects"]]
+    assert any(label in out for label in labels)

@@ -20,6 +20,7 @@ from scenespeak.database import (
     SCHEMA_VERSION,
     Detection,
     ExactIndex,
+    FaissIndex,
     IVFIndex,
     Labelling,
     ObjectDatabase,
@@ -504,6 +505,12 @@ def test_ivf_recall_against_exact(real_descriptors: NDArray[np.uint8]) -> None:
     recall1 = np.mean(approx[:, 0] == exact[:, 0])
     recall2 = np.mean([len(set(a) & set(b)) / 2 for a, b in zip(approx, exact, strict=True)])
     assert recall1 >= 0.9 and recall2 >= 0.85
+    # Two threads scanning the cells give the same answer.
+    ivf.threads = 2
+    np.testing.assert_array_equal(ivf.search(query, 2)[1], approx)
+    # More cells (another selection path) find at least as many.
+    ivf.nprobe = 16
+    assert np.mean(ivf.search(query, 2)[1][:, 0] == exact[:, 0]) >= recall1
     # Probing every cell is exact.
     ivf.nprobe = ivf.nlist
     _, every = ivf.search(query, 2)
@@ -529,29 +536,105 @@ def test_faiss_index_agrees_when_installed(real_descriptors: NDArray[np.uint8]) 
     assert np.mean(got[:, 0] == exact[:, 0]) > 0.99
 
 
-def test_labelling_with_ivf_index(built_db: Path, scene: Scene) -> None:
-    with ObjectDatabase.open(built_db, readonly=True, index="ivf") as db:
+@pytest.mark.parametrize("kind", ["ivf", "faiss"])
+def test_labelling_with_an_inverted_file(built_db: Path, scene: Scene, kind: str) -> None:
+    if kind == "faiss":
+        pytest.importorskip("faiss")
+    with ObjectDatabase.open(built_db, readonly=True, index=kind) as db:  # type: ignore[arg-type]
         result = db.label(scene.features)
     assert {d.label for d in result.detections} == {"astronaut", "coffee", "cat"}
 
 
-def test_quantiser_is_cached_in_the_file(db_copy: Path, scene: Scene) -> None:
-    with ObjectDatabase.open(db_copy, index="ivf") as db:
+@pytest.mark.parametrize("kind", ["ivf", "faiss"])
+def test_quantiser_is_cached_in_the_file(db_copy: Path, scene: Scene, kind: str) -> None:
+    if kind == "faiss":
+        pytest.importorskip("faiss")
+    cls = IVFIndex if kind == "ivf" else FaissIndex
+    with ObjectDatabase.open(db_copy, index=kind) as db:  # type: ignore[arg-type]
         gen = db.generation()
         db.load(seed=0)
         first = db.index
-        assert isinstance(first, IVFIndex)
+        assert isinstance(first, cls)
         assert db.generation() == gen  # caching is not a change of the objects
-    with ObjectDatabase.open(db_copy, readonly=True, index="ivf") as db:
+    with ObjectDatabase.open(db_copy, readonly=True, index=kind) as db:  # type: ignore[arg-type]
         db.load(seed=1)  # a different seed would train other centroids: the cache is used
         second = db.index
-        assert isinstance(second, IVFIndex)
+        assert isinstance(second, cls)
         np.testing.assert_array_equal(second.centroids, first.centroids)
         np.testing.assert_array_equal(second.cells(), first.cells())
-    with ObjectDatabase.open(db_copy, index="ivf") as db:
+    with ObjectDatabase.open(db_copy, index=kind) as db:  # type: ignore[arg-type]
         db.add_object("rocket 2", [scene.objects["rocket"][::-1]])
         db.load(seed=1)  # the objects changed: the cache is stale and not used
         third = db.index
-        assert isinstance(third, IVFIndex)
+        assert isinstance(third, cls)
         assert third.ntotal > first.ntotal
         assert not np.array_equal(third.centroids[: first.nlist], first.centroids)
+
+
+_KILL_SCRIPT = """
+import os, signal, sys
+import cv2
+from scenespeak.database import ObjectDatabase
+
+def die(stage, done, total):
+    if stage == "store" and done == 2:
+        os.kill(os.getpid(), signal.SIGKILL)
+
+images = [cv2.imread(p, cv2.IMREAD_GRAYSCALE) for p in sys.argv[2:]]
+with ObjectDatabase.open(sys.argv[1]) as db:
+    db.add_object("mug", images, progress=die)
+"""
+
+
+@pytest.mark.skipif(not hasattr(__import__("signal"), "SIGKILL"), reason="needs SIGKILL")
+def test_killed_process_leaves_database_as_it_was(
+    db_copy: Path, tmp_path: Path, scene: Scene
+) -> None:
+    import subprocess
+    import sys
+
+    files = []
+    for name in ("cat", "coffee", "rocket"):
+        f = tmp_path / f"{name}.png"
+        cv2.imwrite(str(f), scene.objects[name])
+        files.append(str(f))
+    rows = _rows(db_copy)
+    proc = subprocess.run(
+        [sys.executable, "-c", _KILL_SCRIPT, str(db_copy), *files], capture_output=True
+    )
+    assert proc.returncode == -9, proc.stderr.decode()
+    # SQLite rolls a hot journal back on the next open: the rows are those from before.
+    with ObjectDatabase.open(db_copy) as db:
+        assert "mug" not in db
+    assert _rows(db_copy) == rows
+
+
+@given(
+    n=st.integers(1, 60),
+    nq=st.integers(1, 12),
+    k=st.integers(1, 5),
+    seed=st.integers(0, 2**16),
+)
+def test_exact_index_property(n: int, nq: int, k: int, seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    base = rng.integers(0, 256, (n, 128), dtype=np.uint8)
+    query = rng.integers(0, 256, (nq, 128), dtype=np.uint8)
+    d, i = ExactIndex(base, block=7).search(query, k)
+    full = ((query[:, None].astype(np.int64) - base[None].astype(np.int64)) ** 2).sum(-1)
+    want = np.sort(full, axis=1)[:, :k]
+    got = d[:, : min(k, n)]
+    np.testing.assert_allclose(got, want, rtol=1e-6)
+    np.testing.assert_allclose(np.take_along_axis(full, i[:, : min(k, n)], axis=1), want, rtol=1e-6)
+    assert np.all(np.isinf(d[:, n:])) and np.all(i[:, n:] == -1)
+
+
+def test_faiss_index_without_faiss_is_a_clear_error(built_db: Path, scene: Scene) -> None:
+    try:
+        import faiss  # noqa: F401
+    except ImportError:
+        pass
+    else:
+        pytest.skip("faiss is installed")
+    with ObjectDatabase.open(built_db, readonly=True, index="faiss") as db:
+        with pytest.raises(DatabaseError, match="needs the faiss-cpu package"):
+            db.label(scene.features)

@@ -24,6 +24,7 @@ from skimage.draw import polygon as raster_polygon
 from scenespeak.errors import InputError
 from scenespeak.forces import (
     force_histogram,
+    force_histograms,
     hybrid_histogram,
     intersection_area,
     polygon_area,
@@ -424,6 +425,8 @@ FAR = rect(3, 4, 0, 1)
         (np.zeros((3, 3)), "shape"),
         (np.zeros(6), "shape"),
         ([["a", "b"], ["c", "d"], ["e", "f"]], "cannot be read"),
+        ([[0.0, 0.0], [1.0]], "cannot be read"),  # ragged
+        (np.zeros((8, 8), np.uint8), "dtype bool"),  # an OpenCV-style mask
     ],
 )
 def test_degenerate_polygons_raise_clear_errors(poly: object, match: str) -> None:
@@ -637,3 +640,91 @@ def test_intersection_area_special_cases() -> None:
     assert polygons_intersect(SQUARE, SQUARE + 0.5)
     assert not polygons_intersect(SQUARE, rect(1, 2, 0, 1))
     assert polygon_area(SQUARE[::-1]) == 1.0
+
+
+# --------------------------------------------------------------------------------------------
+# Several exponents at once, odd direction counts, hybrid closed form
+# --------------------------------------------------------------------------------------------
+
+
+@given(a=any_polygon, b=any_polygon, shift=far_offsets)
+def test_force_histograms_equals_separate_calls(
+    a: Array, b: Array, shift: tuple[float, float]
+) -> None:
+    b = b + np.array(shift)
+    both = force_histograms(a, b, r=(0.0, 2.0, 0.5), directions=36)
+    for i, r in enumerate((0.0, 2.0, 0.5)):
+        np.testing.assert_allclose(both[i], force_histogram(a, b, r=r, directions=36))
+
+
+@pytest.mark.parametrize("directions", [1, 3, 7, 45])
+def test_odd_direction_counts_sample_the_same_function(directions: int) -> None:
+    # Odd counts sweep every direction; even ones use the θ + π symmetry. Both must agree
+    # where their angles coincide.
+    a, b = regular(7, (2.5, 0.7), 0.9, 0.2), np.array([[0, 0], [1, 0], [0.2, 0.3], [0, 1.0]])
+    odd = force_histogram(a, b, r=2.0, directions=directions)
+    even = force_histogram(a, b, r=2.0, directions=2 * directions)
+    np.testing.assert_allclose(odd, even[::2], rtol=1e-12, atol=1e-15)
+
+
+def test_hybrid_kernel_against_direct_double_integral() -> None:
+    # f(I, J) = ∫_I ∫_J φ(a - b) for φ(d) = 1/max(d, y0)^2, integrated numerically.
+    from scipy import integrate
+
+    y0 = 0.4
+    a1, a2, b1, b2 = 0.1, 1.3, -0.5, 0.6  # overlapping segments
+
+    def inner(a: float) -> float:
+        top = min(b2, a)
+        if top <= b1:
+            return 0.0
+        kinks = [x for x in (a - y0,) if b1 < x < top]
+        return integrate.quad(
+            lambda b: 1.0 / max(a - b, y0) ** 2, b1, top, points=kinks or None, epsabs=1e-13
+        )[0]
+
+    kinks = [b1, b1 + y0, b2, b2 + y0]
+    f = integrate.quad(inner, a1, a2, points=[k for k in kinks if a1 < k < a2], epsabs=1e-12)[0]
+    terms = np.array([a2 - b1, a1 - b1, a2 - b2, a1 - b2])
+    closed = big_phi(terms, 2.0, y0) @ np.array([1.0, -1.0, -1.0, 1.0])
+    assert closed == pytest.approx(f, rel=1e-7)
+    # and the engine: two rectangles of height h on those segments, p1 = 0 so Y0 = p0*D_min
+    h = 0.7
+    a, b = rect(a1, a2, 0, h), rect(b1, b2, 0, h)
+    d_min = 2 * math.sqrt(min(polygon_area(a), polygon_area(b)) / math.pi)
+    hist = hybrid_histogram(a, b, p0=y0 / d_min, p1=0.0, directions=4)
+    assert hist[0] == pytest.approx(h * closed, rel=1e-10)
+
+
+@pytest.mark.parametrize("tilt", [1e-9, 2e-4, 0.05])
+def test_nearly_parallel_edges_are_integrated_exactly(tilt: float) -> None:
+    # A's left edge leans by `tilt`: the gap to B changes by much less than the gap itself,
+    # the case where the engine switches to a Taylor series. Check against 1-D quadrature of
+    # the exact section formula.
+    from scipy import integrate
+
+    h, z = 1.0, 0.3
+    a = np.array([[1 + z, 0], [3, 0], [3, h], [1 + z + tilt, h]])
+    b = rect(0, 1, 0, h)
+    for r in (0.0, 2.0):
+
+        def sections_force(v: float, r: float = r) -> float:
+            a1 = 1 + z + tilt * v / h
+            t = np.array([3 - 0.0, a1 - 0.0, 3 - 1.0, a1 - 1.0])
+            return float(big_phi(t, r) @ np.array([1.0, -1.0, -1.0, 1.0]))
+
+        expected = integrate.quad(sections_force, 0, h, epsabs=0.0, epsrel=1e-13)[0]
+        got = force_histogram(a, b, r=r, directions=4)[0]
+        assert got == pytest.approx(expected, rel=1e-12)
+
+
+@pytest.mark.parametrize("size", [2, 3, 5, 12, 40])
+def test_traced_mask_area_is_the_pixel_count_minus_half_a_pixel(size: int) -> None:
+    # Marching squares cuts 1/8 px² at each of the (net) four convex corners of a simply
+    # connected mask; the default outline simplification must keep that.
+    yy, xx = np.mgrid[: 2 * size + 8, : 2 * size + 8]
+    disc = np.hypot(yy - size - 4, xx - size - 4) <= size + 0.3
+    square = np.zeros_like(disc)
+    square[4 : 4 + 2 * size, 4 : 4 + 2 * size] = True
+    for mask in (disc, square):
+        assert polygon_area(mask) == pytest.approx(mask.sum() - 0.5, abs=2e-3 * mask.sum())

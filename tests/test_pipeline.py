@@ -187,3 +187,71 @@ def test_describe_files_names_the_inputs(card_db: Path, tmp_path: Path) -> None:
 
 def _truth_xy(obj: dict[str, Any], up: np.ndarray) -> np.ndarray:
     return project_to_plane(np.asarray(obj["centroid"], float)[None], up)[0]
+
+
+@pytest.fixture(scope="module", params=["level", "pitched"])
+def rendered(request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """A few rendered scenes (fixed seeds) and the database learnt from their training views."""
+    scenes = pytest.importorskip("scenespeak.scenes")
+    from scenespeak.pipeline import database_from_dataset
+
+    pitched = request.param == "pitched"
+    root = tmp_path_factory.mktemp(f"rendered_{request.param}")
+    scenes.generate_dataset(root, 3, seed=11 if pitched else 7, pitched=pitched, progress=None)
+    database_from_dataset(root, root / "objects.db")
+    return root
+
+
+def _scenes(root: Path) -> list[Path]:
+    return [root / s for s in json.loads((root / "dataset.json").read_text())["scenes"]]
+
+
+def _describe_rendered(scene: Path, db: Path) -> SceneDescription:
+    return describe_files(
+        scene / "left.png", scene / "right.png", scene / "calib.json", db, unknown=False
+    )
+
+
+def test_rendered_relations_and_centroids(rendered: Path) -> None:
+    """Every unambiguous relation right; every centroid within its tolerance.
+
+    Tolerance on the horizontal plane: 3 cm across (x), and along the depth axis 3 cm plus half
+    the object's depth on the near side — the points are on the visible surface, which is
+    nearer to the camera than the centre of the object's volume by up to half its depth.
+    """
+    db = rendered / "objects.db"
+    described = present = 0
+    checked_relations = 0
+    for scene in _scenes(rendered):
+        truth = json.loads((scene / "truth.json").read_text())
+        desc = _describe_rendered(scene, db)
+        up = desc.up
+        sizes = {
+            o["label"]: o["size"]
+            for o in json.loads((rendered / "dataset.json").read_text())["objects"]
+        }
+        got = {o.label: o for o in desc.objects}
+        for t in truth["objects"]:
+            present += 1
+            obj = got.get(t["label"])
+            if obj is None:
+                assert (
+                    t["label"] in {s.label for s in desc.skipped}
+                    or t.get("visible_fraction", 1.0) < 0.5
+                ), f"{scene.name}: {t['label']} neither described nor skipped"
+                continue
+            described += 1
+            dx, dy = obj.plane_centroid - _truth_xy(t, up)
+            half_depth = 0.5 * max(sizes[t["label"]][:2])
+            assert abs(dx) <= 0.03, f"{scene.name} {t['label']}: x off by {dx:.3f} m"
+            assert -0.03 - half_depth <= dy <= 0.03, f"{scene.name} {t['label']}: depth {dy:.3f}"
+        for r in truth["relations"]:
+            if r["ambiguous"]:
+                continue
+            rel = desc.relation(r["argument"], r["referent"])
+            if rel is None:
+                continue
+            checked_relations += 1
+            assert rel.primary == r["primary"], (scene.name, r, rel.sentence)
+    assert described >= 0.8 * present
+    assert checked_relations > 0

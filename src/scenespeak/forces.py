@@ -13,9 +13,13 @@ the four-term formula of forces.md pairs every endpoint of an A-section with eve
 B-section, so ``F(θ)`` is a signed sum over (edge of A, edge of B) of ``∫ Φ(s_A(v) - s_B(v)) dv``
 over the range of lines both edges cross. Both ``s_A`` and ``s_B`` are linear in ``v``, so each
 integral is closed-form (an antiderivative ``Ψ`` of ``Φ``). Only edge pairs whose line ranges
-overlap contribute; they are found for all directions at once with one sort and two binary
-searches, so the cost is close to O((n + m) · directions) for convex objects. No line is ever
-sampled: the result is exact up to rounding.
+overlap contribute; they are found for a block of directions at once from one sort of the
+vertices per direction and cumulative counts, so the cost is close to O((n + m) · directions)
+for convex objects. No line is ever sampled: the result is exact up to rounding. With an even
+number of directions only half are swept; the pairs give ``F(θ + π)`` too.
+
+Masks are traced into polygons (marching squares at level 0.5, holes included) and computed
+exactly in the same way.
 
 Direction convention: ``h[k]`` is the value at angle ``2*pi*k/directions``; angle 0 is +x and
 ``pi/2`` is +y. For masks, +x is increasing column and +y is *decreasing* row (image "up").
@@ -57,6 +61,13 @@ _LENGTH_TOL = 1e-10
 _AREA_TOL = 1e-10
 # Below this |h| / |m| the divided difference of Ψ is replaced by its Taylor series.
 _TAYLOR_RATIO = 1e-3
+# Largest temporary (elements) of the quadratic geometry tests; they run in chunks.
+_CHUNK = 1 << 21
+# Directions are swept in blocks of about this many (direction, vertex) entries.
+_BLOCK = 4096
+_BLOCK_PAIRS = 32768
+# Default simplification of traced mask outlines, in pixels.
+_MASK_TOLERANCE = 0.25
 
 
 # --------------------------------------------------------------------------------------------
@@ -77,9 +88,14 @@ class _Region:
     name: str
 
 
+def _next(p: NDArray[np.generic]) -> NDArray[np.generic]:
+    """The array shifted by one along axis 0, cyclically: row i holds row i + 1."""
+    return np.concatenate([p[1:], p[:1]])
+
+
 def _shoelace(p: FloatArray) -> float:
-    x, y = p[:, 0], p[:, 1]
-    return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y))
+    q = _next(p)
+    return 0.5 * float(np.dot(p[:, 0], q[:, 1]) - np.dot(q[:, 0], p[:, 1]))
 
 
 def _segment_distances(
@@ -119,51 +135,55 @@ def _polygon_region(polygon: ArrayLike, name: str) -> _Region:
     except (TypeError, ValueError) as exc:
         raise InputError(name, f"cannot be read as an (N, 2) array of vertices ({exc})") from exc
     if p.ndim != 2 or p.shape[1] != 2:
+        hint = ""
+        if p.ndim == 2 and np.asarray(polygon).dtype.kind in "uif":
+            hint = " (a mask must have dtype bool: pass e.g. `mask > 0`)"
         raise InputError(
             name,
             f"expected an (N, 2) array of polygon vertices or a 2-D boolean mask, "
-            f"got an array of shape {p.shape}",
+            f"got an array of shape {p.shape}{hint}",
         )
-    if not np.all(np.isfinite(p)):
+    if not np.isfinite(p).all():
         raise InputError(name, "polygon vertices contain NaN or infinite coordinates")
     # Drop repeated consecutive vertices (including a closing copy of the first one).
     if len(p) > 1:
-        keep = np.any(p != np.roll(p, 1, axis=0), axis=1)
-        if not np.any(keep):
-            keep[0] = True
-        p = p[keep]
+        keep = (p != _next(p)).any(axis=1)
+        if not keep.all():
+            keep[-1] |= not keep.any()  # all equal: keep one
+            p = p[keep]
     if len(p) < 3:
         raise InputError(name, f"a polygon needs at least 3 distinct vertices, got {len(p)}")
-    scale = float(np.max(np.ptp(p, axis=0)))
+    scale = float((p.max(axis=0) - p.min(axis=0)).max())
     area = _shoelace(p)
     if scale == 0.0 or abs(area) <= _AREA_TOL * scale * scale:
+        # A zero signed area with vertices off one line is a self-intersection (a bow tie).
         d = p - p[0]
-        spread = np.abs(
-            d[:, 0] * d[np.argmax(np.abs(d).sum(axis=1)), 1]
-            - d[:, 1] * d[np.argmax(np.abs(d).sum(axis=1)), 0]
-        )
-        if scale > 0.0 and float(spread.max()) > _AREA_TOL * scale * scale:
-            _check_simple(p, np.roll(p, -1, axis=0), scale, name)
+        far = d[np.argmax(np.abs(d).sum(axis=1))]
+        off_line = np.abs(d[:, 0] * far[1] - d[:, 1] * far[0]).max()
+        if scale > 0.0 and float(off_line) > _AREA_TOL * scale * scale:
+            _check_simple(p, _next(p), scale, name)
         raise InputError(name, "polygon has zero area (all vertices collinear or coincident)")
     if area < 0:
         p = p[::-1].copy()
         area = -area
-    q = np.roll(p, -1, axis=0)
+    q = _next(p)
     e = q - p
-    e_next = np.roll(e, -1, axis=0)
+    e_next = _next(e)
     turn = e[:, 0] * e_next[:, 1] - e[:, 1] * e_next[:, 0]
     # Convex: no right turn, and the edge directions go round exactly once.
-    tol = _LENGTH_TOL * scale * scale
-    angles = np.arctan2(turn, np.einsum("ij,ij->i", e, e_next))
-    convex = bool(np.all(turn >= -tol)) and abs(float(np.sum(angles)) - 2 * math.pi) < 1e-6
+    convex = bool((turn >= -_LENGTH_TOL * scale * scale).all())
+    if convex:
+        angles = np.arctan2(turn, e[:, 0] * e_next[:, 0] + e[:, 1] * e_next[:, 1])
+        convex = abs(float(angles.sum()) - 2 * math.pi) < 1e-6
     if not convex:
         _check_simple(p, q, scale, name)
-    idx = np.arange(len(p))
+    n = len(p)
+    idx = np.arange(n)
     return _Region(
         start=p,
         end=q,
-        nxt=np.roll(idx, -1),
-        prv=np.roll(idx, 1),
+        nxt=np.concatenate([idx[1:], idx[:1]]),
+        prv=np.concatenate([idx[n - 1 :], idx[: n - 1]]),
         area=area,
         convex=convex,
         name=name,
@@ -175,7 +195,7 @@ def _check_simple(p: FloatArray, q: FloatArray, scale: float, name: str) -> None
     n = len(p)
     # Adjacent edges that fold back onto each other (a spike) overlap.
     e = q - p
-    e_next = np.roll(e, -1, axis=0)
+    e_next = _next(e)
     turn = e[:, 0] * e_next[:, 1] - e[:, 1] * e_next[:, 0]
     dot = np.einsum("ij,ij->i", e, e_next)
     norms = np.linalg.norm(e, axis=1) * np.linalg.norm(e_next, axis=1)
@@ -234,10 +254,11 @@ def _mask_region(mask: NDArray[np.bool_], name: str, tolerance: float) -> _Regio
     for c in contours:
         if len(c) > 1 and np.array_equal(c[0], c[-1]):
             c = c[:-1]
-        if tolerance > 0 and len(c) > 3:
+        if tolerance > 0 and len(c) > 4:
             # Marching-squares vertices sit on the half-pixel grid: exact in float32.
             kept = cv2.approxPolyDP(c.astype(np.float32)[:, None, :], tolerance, True)
-            c = kept[:, 0, :].astype(np.float64)
+            if len(kept) >= 3:  # else keep the (tiny) ring as traced
+                c = kept[:, 0, :].astype(np.float64)
         # (row, col) in the padded crop → (x, y) = (column, -row) in the mask
         xy = np.column_stack([c[:, 1] + (c0 - 1.0), (1.0 - r0) - c[:, 0]])
         if len(xy) < 3:
@@ -247,10 +268,10 @@ def _mask_region(mask: NDArray[np.bool_], name: str, tolerance: float) -> _Regio
             continue
         area += a
         starts.append(xy)
-        ends.append(np.roll(xy, -1, axis=0))
+        ends.append(_next(xy))
         idx = total + np.arange(len(xy))
-        nxts.append(np.roll(idx, -1))
-        prvs.append(np.roll(idx, 1))
+        nxts.append(_next(idx))
+        prvs.append(np.concatenate([idx[-1:], idx[:-1]]))
         total += len(xy)
     if not starts or area <= 0:
         raise InputError(name, "mask outline has zero area")
@@ -274,19 +295,23 @@ def _mask_region(mask: NDArray[np.bool_], name: str, tolerance: float) -> _Regio
 
 def _winding(points: FloatArray, reg: _Region) -> NDArray[np.int64]:
     """Winding numbers of ``points`` (P, 2) with respect to the region's oriented edges."""
-    px = points[:, 0][:, None]
-    py = points[:, 1][:, None]
+    out = np.empty(len(points), dtype=np.int64)
     ax, ay = reg.start[:, 0][None, :], reg.start[:, 1][None, :]
     bx, by = reg.end[:, 0][None, :], reg.end[:, 1][None, :]
-    side = (bx - ax) * (py - ay) - (by - ay) * (px - ax)
-    up = (ay <= py) & (by > py) & (side > 0)
-    down = (ay > py) & (by <= py) & (side < 0)
-    return np.sum(up, axis=1) - np.sum(down, axis=1)
+    step = max(1, _CHUNK // max(len(reg.start), 1))
+    for k in range(0, len(points), step):
+        px = points[k : k + step, 0][:, None]
+        py = points[k : k + step, 1][:, None]
+        side = (bx - ax) * (py - ay) - (by - ay) * (px - ax)
+        up = (ay <= py) & (by > py) & (side > 0)
+        down = (ay > py) & (by <= py) & (side < 0)
+        out[k : k + step] = up.sum(axis=1) - down.sum(axis=1)
+    return out
 
 
 def _scale(a: _Region, b: _Region) -> float:
     pts = np.concatenate([a.start, b.start])
-    return float(np.max(np.ptp(pts, axis=0)))
+    return float((pts.max(axis=0) - pts.min(axis=0)).max())
 
 
 def _bbox_candidates(
@@ -297,10 +322,19 @@ def _bbox_candidates(
     hi1 = np.maximum(p1, q1) + tol
     lo2 = np.minimum(p2, q2)
     hi2 = np.maximum(p2, q2)
-    ok = (lo1[:, None, 0] <= hi2[None, :, 0]) & (lo2[None, :, 0] <= hi1[:, None, 0])
-    ok &= (lo1[:, None, 1] <= hi2[None, :, 1]) & (lo2[None, :, 1] <= hi1[:, None, 1])
-    i, j = np.nonzero(ok)
-    return i, j
+    step = max(1, _CHUNK // max(len(p2), 1))
+    found_i: list[NDArray[np.intp]] = []
+    found_j: list[NDArray[np.intp]] = []
+    for k in range(0, len(p1), step):
+        l1, h1 = lo1[k : k + step], hi1[k : k + step]
+        ok = (l1[:, None, 0] <= hi2[None, :, 0]) & (lo2[None, :, 0] <= h1[:, None, 0])
+        ok &= (l1[:, None, 1] <= hi2[None, :, 1]) & (lo2[None, :, 1] <= h1[:, None, 1])
+        i, j = np.nonzero(ok)
+        found_i.append(i + k)
+        found_j.append(j)
+    if not found_i:
+        return np.zeros(0, np.intp), np.zeros(0, np.intp)
+    return np.concatenate(found_i), np.concatenate(found_j)
 
 
 def _boundaries_touch(a: _Region, b: _Region, tol: float) -> bool:
@@ -312,62 +346,76 @@ def _boundaries_touch(a: _Region, b: _Region, tol: float) -> bool:
     return bool(d.min() <= tol)
 
 
-def _boundary_part_inside(a: _Region, b: _Region, keep_shared: bool) -> float:
-    """``∮ x dy`` over the part of ``a``'s boundary inside ``b`` (Green's theorem)."""
-    p, q = a.start, a.end
-    e = q - p
-    f0, f1 = b.start, b.end
-    g = f1 - f0
-    # Parameters t along each a-edge where it meets b-edges.
-    den = e[:, None, 0] * g[None, :, 1] - e[:, None, 1] * g[None, :, 0]
-    w = f0[None, :, :] - p[:, None, :]
+def _boundary_part_inside(
+    a: _Region, b: _Region, keep_shared: bool, origin: FloatArray, scale: float
+) -> float:
+    """``∮ x dy`` over the part of ``a``'s boundary inside ``b`` (Green's theorem).
+
+    Every edge of ``a`` is split where it crosses an edge of ``b`` (and where a vertex of ``b``
+    lies on it); each piece is kept if its midpoint is inside ``b``. Pieces lying on ``b``'s
+    boundary are kept (``keep_shared``) only if both interiors are on the same side.
+    """
+    p, q = a.start - origin, a.end - origin
+    f0, f1 = b.start - origin, b.end - origin
+    tol = 1e-9 * scale
+    i, j = _bbox_candidates(p, q, f0, f1, tol)
+    e = q[i] - p[i]
+    g = f1[j] - f0[j]
+    w = f0[j] - p[i]
+    den = e[:, 0] * g[:, 1] - e[:, 1] * g[:, 0]
     with np.errstate(divide="ignore", invalid="ignore"):
-        t = (w[..., 0] * g[None, :, 1] - w[..., 1] * g[None, :, 0]) / den
-        u = (w[..., 0] * e[:, None, 1] - w[..., 1] * e[:, None, 0]) / den
-    ok = (den != 0) & (t > 0) & (t < 1) & (u >= 0) & (u <= 1)
-    # Also split where b's vertices lie on a's edges (collinear overlaps).
-    ee = np.einsum("ij,ij->i", e, e)
-    tv = np.einsum("ijk,ik->ij", f0[None, :, :] - p[:, None, :], e) / ee[:, None]
-    foot = p[:, None, :] + tv[..., None] * e[:, None, :]
-    scale = max(_scale(a, b), 1e-300)
-    on = (np.linalg.norm(foot - f0[None, :, :], axis=2) <= 1e-9 * scale) & (tv > 0) & (tv < 1)
+        t = (w[:, 0] * g[:, 1] - w[:, 1] * g[:, 0]) / den
+        u = (w[:, 0] * e[:, 1] - w[:, 1] * e[:, 0]) / den
+        crossing = (den != 0) & (t > 0) & (t < 1) & (u >= 0) & (u <= 1)
+        # Vertices of b lying on a's edges (collinear overlaps) split too.
+        tv = (w[:, 0] * e[:, 0] + w[:, 1] * e[:, 1]) / (e[:, 0] ** 2 + e[:, 1] ** 2)
+    foot = p[i] + tv[:, None] * e
+    on = (np.hypot(*(foot - f0[j]).T) <= tol) & (tv > 0) & (tv < 1)
     n_edges = len(p)
-    ts = np.where(ok, t, np.nan)
-    tvs = np.where(on, tv, np.nan)
-    allt = np.concatenate([np.zeros((n_edges, 1)), ts, tvs, np.ones((n_edges, 1))], axis=1)
-    allt = np.sort(allt, axis=1)  # NaN sorted last
-    t0 = allt[:, :-1]
-    t1 = allt[:, 1:]
-    valid = np.isfinite(t0) & np.isfinite(t1) & (t1 > t0)
-    ei, _ = np.nonzero(valid)
-    t0v, t1v = t0[valid], t1[valid]
-    a0 = p[ei] + t0v[:, None] * e[ei]
-    a1 = p[ei] + t1v[:, None] * e[ei]
+    edge = np.concatenate([np.arange(n_edges), np.arange(n_edges), i[crossing], i[on]])
+    par = np.concatenate([np.zeros(n_edges), np.ones(n_edges), t[crossing], tv[on]])
+    order = np.lexsort((par, edge))
+    edge, par = edge[order], par[order]
+    piece = (edge[1:] == edge[:-1]) & (par[1:] > par[:-1])
+    ei, t0, t1 = edge[:-1][piece], par[:-1][piece], par[1:][piece]
+    d = q[ei] - p[ei]
+    a0 = p[ei] + t0[:, None] * d
+    a1 = p[ei] + t1[:, None] * d
     mid = 0.5 * (a0 + a1)
-    # Pieces lying on b's boundary: kept once if both interiors are on the same side.
-    seg_d = _segment_distances(mid[:, None, :], mid[:, None, :], f0[None, :, :], f1[None, :, :])
-    on_b = seg_d <= 1e-9 * scale
-    piece_dir = (a1 - a0)[:, None, :]
-    same = np.einsum("ijk,ijk->ij", piece_dir, np.broadcast_to(g[None, :, :], (*on_b.shape, 2)))
-    on_any = on_b.any(axis=1)
-    same_dir = (on_b & (same > 0)).any(axis=1)
-    inside = _winding(mid, b) != 0
-    keep = np.where(on_any, same_dir & keep_shared, inside)
+    # Pieces lying on b's boundary.
+    pk, pj = _bbox_candidates(mid, mid, f0, f1, tol)
+    near = _segment_distances(mid[pk], mid[pk], f0[pj], f1[pj]) <= tol
+    pk, pj = pk[near], pj[near]
+    on_b = np.zeros(len(mid), bool)
+    on_b[pk] = True
+    same = np.zeros(len(mid), bool)
+    same[pk[np.einsum("ij,ij->i", (a1 - a0)[pk], f1[pj] - f0[pj]) > 0]] = True
+    inside = np.zeros(len(mid), bool)
+    rest = np.flatnonzero(~on_b)
+    inside[rest] = _winding(mid[rest] + origin, b) != 0
+    keep = np.where(on_b, same & keep_shared, inside)
     xdy = 0.5 * (a0[:, 0] + a1[:, 0]) * (a1[:, 1] - a0[:, 1])
     return float(np.sum(xdy[keep]))
 
 
 def _intersection_area(a: _Region, b: _Region) -> float:
-    area = _boundary_part_inside(a, b, keep_shared=True) + _boundary_part_inside(
-        b, a, keep_shared=False
+    origin = a.start[0]
+    scale = max(_scale(a, b), 1e-300)
+    area = _boundary_part_inside(a, b, True, origin, scale) + _boundary_part_inside(
+        b, a, False, origin, scale
     )
     return max(area, 0.0)
 
 
 def _contact(a: _Region, b: _Region) -> tuple[float, bool]:
     """Return (area of A∩B, whether the boundaries touch or cross)."""
-    scale = _scale(a, b)
-    if not _boundaries_touch(a, b, _LENGTH_TOL * scale):
+    lo_a, hi_a = a.start.min(axis=0), a.start.max(axis=0)
+    lo_b, hi_b = b.start.min(axis=0), b.start.max(axis=0)
+    scale = float((np.maximum(hi_a, hi_b) - np.minimum(lo_a, lo_b)).max())
+    tol = _LENGTH_TOL * scale
+    if (lo_a > hi_b + tol).any() or (lo_b > hi_a + tol).any():
+        return 0.0, False  # bounding boxes apart
+    if not _boundaries_touch(a, b, tol):
         # Boundaries apart: the interiors overlap only if one contains the other.
         if _winding(a.start[:1], b)[0] != 0:
             return a.area, False
@@ -434,34 +482,28 @@ class _Kernel:
         return u ** (3 - r) / ((1 - r) * (2 - r) * (3 - r))
 
 
-def _segment_integrals(
-    kernel: _Kernel, d0: FloatArray, d1: FloatArray
-) -> tuple[FloatArray, FloatArray]:
-    """Means of ``Φ⁺(d)`` and of ``Φ⁺(-d)`` over an interval where ``d`` is linear, d0 → d1.
+def _mean_phi(kernel: _Kernel, a0: FloatArray, a1: FloatArray) -> FloatArray:
+    """Mean of ``Φ⁺`` over an interval on which the gap goes linearly from a0 to a1 (>= 0).
 
-    ``Φ⁺`` is ``Φ`` on ``u > 0`` and 0 elsewhere. The mean of ``Φ⁺(d)`` is
-    ``(Ψ⁺(d1) - Ψ⁺(d0)) / (d1 - d0)`` (``Ψ' = Φ``), replaced by its Taylor series about the
-    midpoint when ``d1 - d0`` is tiny next to ``d``. ``Φ⁺(-d)`` serves the opposite direction.
+    ``Φ⁺`` is ``Φ`` on ``u > 0`` and 0 at ``u = 0``. The mean is
+    ``(Ψ(a1) - Ψ(a0)) / (a1 - a0)`` (``Ψ' = Φ``, ``Ψ(0) = 0``), replaced by its Taylor series
+    about the midpoint, ``Φ(m) + φ(m) (a1 - a0)² / 24``, when ``a1 - a0`` is tiny next to ``m``.
     """
-    h = d1 - d0
-    m = 0.5 * (d0 + d1)
-    small = np.abs(h) <= _TAYLOR_RATIO * np.abs(m)
-    a0 = np.abs(d0)
-    a1 = np.abs(d1)
-    q0 = kernel.psi(np.where(a0 > 0, a0, 1.0))
-    q1 = kernel.psi(np.where(a1 > 0, a1, 1.0))
-    hs = np.where(small, 1.0, h)
-    ahead = (np.where(d1 > 0, q1, 0.0) - np.where(d0 > 0, q0, 0.0)) / hs
-    behind = (np.where(d0 < 0, q0, 0.0) - np.where(d1 < 0, q1, 0.0)) / hs
+    h = a1 - a0
+    m = 0.5 * (a0 + a1)
+    small = np.abs(h) <= _TAYLOR_RATIO * m
+    pos0 = a0 > 0
+    pos1 = a1 > 0
+    p0 = np.where(pos0, kernel.psi(np.where(pos0, a0, 1.0)), 0.0)
+    p1 = np.where(pos1, kernel.psi(np.where(pos1, a1, 1.0)), 0.0)
+    out = (p1 - p0) / np.where(small, 1.0, h)
     idx = np.flatnonzero(small)
     if idx.size:
         ms, hh = m[idx], h[idx]
-        am = np.abs(ms)
-        safe = np.where(am > 0, am, 1.0)
+        safe = np.where(ms > 0, ms, 1.0)
         taylor = kernel.big_phi(safe) + kernel.force(safe) * hh * hh / 24.0
-        ahead[idx] = np.where(ms > 0, taylor, 0.0)
-        behind[idx] = np.where(ms < 0, taylor, 0.0)
-    return ahead, behind
+        out[idx] = np.where(ms > 0, taylor, 0.0)
+    return out
 
 
 # --------------------------------------------------------------------------------------------
@@ -469,24 +511,13 @@ def _segment_integrals(
 # --------------------------------------------------------------------------------------------
 
 
-def _sortable(v: FloatArray, bit: NDArray[np.int64]) -> NDArray[np.int64]:
-    """Integer keys ordered like ``v`` with the lowest bit replaced by ``bit`` (a tie-break).
-
-    Dropping the lowest mantissa bit can only reorder values one ulp apart, which changes
-    the result by rounding-level amounts (pairs whose overlap is an ulp long).
-    """
-    i = np.ascontiguousarray(v, dtype=np.float64).view(np.int64)
-    i = np.where(i < 0, i ^ np.int64(0x7FFFFFFFFFFFFFFF), i)
-    return (i & np.int64(-2)) | bit
-
-
 def _expand(start: NDArray[np.intp], end: NDArray[np.intp]) -> tuple[NDArray[np.intp], ...]:
     """Rows and positions of all ``range(start[i], end[i])`` concatenated."""
     counts = np.maximum(end - start, 0)
-    total = int(counts.sum())
+    csum = np.cumsum(counts)
+    total = int(csum[-1]) if len(csum) else 0
     rows = np.repeat(np.arange(len(start)), counts)
-    offsets = np.cumsum(counts) - counts
-    pos = np.arange(total) - np.repeat(offsets - start, counts)
+    pos = np.arange(total) + (start + counts - csum)[rows]
     return rows, pos
 
 
@@ -508,81 +539,82 @@ def _pairs(a: _Region, b: _Region, c: FloatArray, s: FloatArray) -> _Pairs:
     """All (edge of A, edge of B) pairs whose v-ranges overlap, for each direction (c, s).
 
     Both regions' vertices are put in one table (A first). Edge ``e`` runs from vertex ``e``
-    to vertex ``nxt[e]``; its lower vertex in ``v`` is ``low[e]``. A pair overlaps iff
-    ``lo_e <= lo_f < hi_e`` or ``lo_f < lo_e <= hi_f`` (the second case may add pairs of zero
-    overlap, which weigh nothing). One sort of all vertices per direction (A before B at
-    ties) gives, by cumulative counts of lower vertices, both ranges and each edge's rank in
-    the order of ``lo`` within its region.
+    to vertex ``nxt[e]``; ``low[e]``/``high[e]`` are its lower and upper vertices in ``v``.
+    The vertices of both regions are sorted by ``v`` in each direction; ``≺`` is that order (a
+    total order; ties broken arbitrarily). A pair overlaps iff ``low_e ≺ low_f ≺ high_e`` or
+    ``low_f ≺ low_e ≺ high_f``: that finds every pair with a common range of positive length
+    exactly once (pairs tied at a single ``v`` may come too; they weigh nothing). Cumulative
+    counts of lower vertices along the order give, for every edge, the contiguous run (in the
+    other region's edges sorted by lower vertex) that satisfies its case.
     """
     n, m = len(a.start), len(b.start)
     width = n + m
     n_dir = len(c)
-    centre = 0.5 * (a.start.mean(axis=0) + b.start.mean(axis=0))
+    centre = 0.5 * (a.start[0] + b.start[0])
     pts = np.concatenate([a.start, b.start]) - centre
     nxt = np.concatenate([a.nxt, b.nxt + n])
     prv = np.concatenate([a.prv, b.prv + n])
-    s_all = (pts @ np.stack([c, s])).T  # (D, N): position along u = (cos, sin)
-    v_all = (pts @ np.stack([-s, c])).T  # position across, along n = (-sin, cos)
+    sv = (pts @ np.concatenate([np.stack([c, s]), np.stack([-s, c])], axis=1)).T
+    s_all = sv[:n_dir]  # (D, N): position along u = (cos, sin)
+    v_all = sv[n_dir:]  # position across, along n = (-sin, cos)
     v1 = v_all[:, nxt]
     s1 = s_all[:, nxt]
     down = v1 < v_all
     idx = np.arange(width)
-    low = np.where(down, nxt, idx)
-    high = np.where(down, idx, nxt)
+    low = idx + down * (nxt - idx)
     attrs = np.empty((5, n_dir, width))
-    lo = np.where(down, v1, v_all)
-    hi = np.where(down, v_all, v1)
-    slo = np.where(down, s1, s_all)
-    span = hi - lo
-    attrs[0] = lo
-    attrs[1] = hi
-    attrs[2] = slo
-    attrs[3] = (np.where(down, s_all, s1) - slo) / np.where(span > 0, span, 1.0)
-    attrs[4] = np.sign(v1 - v_all)
-    # Per vertex: how many edges it is the lower vertex of; an edge that shares its lower
-    # vertex with the previous edge ranks second.
-    starts_low = low == idx
-    incoming_low = low[:, prv] == idx
+    np.minimum(v_all, v1, out=attrs[0])
+    np.maximum(v_all, v1, out=attrs[1])
+    np.copyto(attrs[2], s_all)
+    np.copyto(attrs[2], s1, where=down)
+    dv = v1 - v_all
+    np.divide(s1 - s_all, np.where(dv != 0, dv, np.inf), out=attrs[3])
+    np.sign(dv, out=attrs[4])
+    # Per vertex: how many edges it is the lower vertex of (0, 1, 2); an edge that shares its
+    # lower vertex with the previous edge ranks second among the two.
+    starts_low = ~down
+    incoming_low = down[:, prv]
     mult = starts_low.astype(np.intp) + incoming_low
     second = starts_low & incoming_low
 
-    in_b = idx >= n
-    keys = _sortable(v_all, in_b.astype(np.int64))
-    # Flat indexing throughout: (direction d, column j) of a (D, w) array is d*w + j.
     row = np.arange(n_dir)[:, None]
-    order = np.argsort(keys, axis=1)
-    is_b = in_b[order]
+    order = np.argsort(v_all, axis=1)
+    is_b = order >= n
     order = (order + row * width).ravel()
     ms = mult.ravel()[order].reshape(n_dir, width)
     ma = np.where(is_b, 0, ms)
     mb = ms - ma
-    # Per vertex: the number of A-edges (cnt_a) / B-edges (cnt_b) whose lower vertex sorts
-    # before it.
+    # Per vertex: d*n + the number of A-edges whose lower vertex comes before it in the order
+    # of direction d (cnt_a), and d*m + the same for B-edges (cnt_b). One cumulative sum runs
+    # over all directions: each direction has n lower ends of A-edges and m of B-edges.
     cnt_a = np.empty(n_dir * width, dtype=np.intp)
     cnt_b = np.empty(n_dir * width, dtype=np.intp)
-    cnt_a[order] = (np.cumsum(ma, axis=1) - ma).ravel()
-    cnt_b[order] = (np.cumsum(mb, axis=1) - mb).ravel()
+    ma = ma.ravel()
+    mb = mb.ravel()
+    cnt_a[order] = np.cumsum(ma) - ma
+    cnt_b[order] = np.cumsum(mb) - mb
     flat_low = low + row * width
-    flat_high = high + row * width
+    flat_high = (nxt + idx - low) + row * width
     low_a, low_b = flat_low[:, :n].ravel(), flat_low[:, n:].ravel()
     high_a, high_b = flat_high[:, :n].ravel(), flat_high[:, n:].ravel()
-    edges_a = (idx[:n] + row * width).ravel()  # flat ids of A's edges
+    # Flat ids of the edges (columns of attrs), and the same sorted by lower vertex per
+    # direction, B's block first, then A's.
+    edges_a = (idx[:n] + row * width).ravel()
     edges_b = (idx[n:] + row * width).ravel()
-    off_a = np.repeat(np.arange(n_dir) * n, n)
-    off_b = np.repeat(np.arange(n_dir) * m, m)
-    # Edges of each region in order of lo, per direction.
-    sorted_a = np.empty(n_dir * n, dtype=np.intp)
-    sorted_a[cnt_a[low_a] + second[:, :n].ravel() + off_a] = edges_a
-    sorted_b = np.empty(n_dir * m, dtype=np.intp)
-    sorted_b[cnt_b[low_b] + second[:, n:].ravel() + off_b] = edges_b
-    # Case 1: for each A-edge, the B-edges with lo_e <= lo_f < hi_e.
-    off_ab = np.repeat(np.arange(n_dir) * m, n)
-    r1, p1 = _expand(cnt_b[low_a] + off_ab, cnt_b[high_a] + off_ab)
-    # Case 2: for each B-edge, the A-edges with lo_f < lo_e <= hi_f.
-    off_ba = np.repeat(np.arange(n_dir) * n, m)
-    r2, p2 = _expand(cnt_a[low_b] + off_ba, cnt_a[high_b] + off_ba)
-    ia = np.concatenate([edges_a[r1], sorted_a[p2]])
-    ib = np.concatenate([sorted_b[p1], edges_b[r2]])
+    a_block = n_dir * m  # by_lo holds B's edges, then A's
+    by_lo = np.empty(n_dir * width, dtype=np.intp)
+    by_lo[cnt_b[low_b] + second[:, n:].ravel()] = edges_b
+    by_lo[cnt_a[low_a] + (second[:, :n].ravel() + a_block)] = edges_a
+    # Case 1, per A-edge: the B-edges with low_e ≺ low_f ≺ high_e (a run in B's block).
+    # Case 2, per B-edge: the A-edges with low_f ≺ low_e ≺ high_f (a run in A's block).
+    start = np.concatenate([cnt_b[low_a], cnt_a[low_b] + a_block])
+    end = np.concatenate([cnt_b[high_a], cnt_a[high_b] + a_block])
+    rows, pos = _expand(start, end)
+    first = np.concatenate([edges_a, edges_b])[rows]
+    other = by_lo[pos]
+    case1 = rows < n_dir * n
+    ia = np.where(case1, first, other)
+    ib = np.where(case1, other, first)
     return _Pairs(a=ia, b=ib, direction=ia // width, attrs=attrs.reshape(5, -1))
 
 
@@ -597,24 +629,52 @@ def _edge_pair_histograms(
     """
     half = directions // 2 if directions % 2 == 0 else directions
     theta = 2.0 * np.pi * np.arange(half) / directions
+    cos, sin = np.cos(theta), np.sin(theta)
     out = np.empty((len(kernels), directions))
+    # Sweep the directions in blocks so that the temporaries stay small (cache-resident).
+    width = len(a.start) + len(b.start)
+    block = first_block = half if half * width <= 4 * _BLOCK else max(1, _BLOCK // width)
+    first = 0
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-        pairs = _pairs(a, b, np.cos(theta), np.sin(theta))
-        lo_a, hi_a, s_a, k_a, sg_a = np.take(pairs.attrs, pairs.a, axis=1)
-        lo_b, hi_b, s_b, k_b, sg_b = np.take(pairs.attrs, pairs.b, axis=1)
-        lo = np.maximum(lo_a, lo_b)
-        hi = np.minimum(hi_a, hi_b)
-        d0 = (s_a + k_a * (lo - lo_a)) - (s_b + k_b * (lo - lo_b))
-        d1 = (s_a + k_a * (hi - lo_a)) - (s_b + k_b * (hi - lo_b))
-        # A-edges count + where they leave A (exit), B-edges + where they enter B.
-        weight = (sg_a * sg_b) * np.minimum(lo - hi, 0.0)
-        for i, kernel in enumerate(kernels):
-            ahead, behind = _segment_integrals(kernel, d0, d1)
-            out[i, :half] = np.bincount(pairs.direction, weights=weight * ahead, minlength=half)
-            if half < directions:
-                out[i, half:] = np.bincount(
-                    pairs.direction, weights=weight * behind, minlength=half
+        while first < half:
+            rows = slice(first, min(first + block, half))
+            first = rows.stop
+            pairs = _pairs(a, b, cos[rows], sin[rows])
+            # Next block: about _BLOCK_PAIRS pairs, judging by this one.
+            per_row = max(len(pairs.a), 1) / (rows.stop - rows.start)
+            block = max(1, min(int(_BLOCK_PAIRS / per_row), 4 * first_block))
+            lo_a, hi_a, s_a, k_a, sg_a = np.take(pairs.attrs, pairs.a, axis=1)
+            lo_b, hi_b, s_b, k_b, sg_b = np.take(pairs.attrs, pairs.b, axis=1)
+            lo = np.maximum(lo_a, lo_b)
+            hi = np.minimum(hi_a, hi_b)
+            d0 = (s_a + k_a * (lo - lo_a)) - (s_b + k_b * (lo - lo_b))
+            d1 = (s_a + k_a * (hi - lo_a)) - (s_b + k_b * (hi - lo_b))
+            # A-edges count + where they leave A (exit), B-edges + where they enter B.
+            weight = (sg_a * sg_b) * np.minimum(lo - hi, 0.0)
+            # A pair serves direction θ where d > 0 and θ + π where d < 0 (bin + n_rows). A
+            # pair whose gap changes sign is split at the zero into one part for each.
+            n_rows = rows.stop - rows.start
+            bins = pairs.direction + n_rows * ((d0 + d1) < 0)
+            g0, g1 = np.abs(d0), np.abs(d1)
+            cross = np.flatnonzero(d0 * d1 < 0)
+            if cross.size:
+                c0, c1, cw = d0[cross], d1[cross], weight[cross]
+                frac = np.maximum(c0, c1) / (np.abs(c0) + np.abs(c1))
+                g0[cross] = 0.0
+                g1[cross] = np.maximum(c0, c1)
+                weight[cross] = cw * frac
+                bins[cross] = pairs.direction[cross]
+                g0 = np.concatenate([g0, np.zeros(cross.size)])
+                g1 = np.concatenate([g1, -np.minimum(c0, c1)])
+                weight = np.concatenate([weight, cw * (1.0 - frac)])
+                bins = np.concatenate([bins, pairs.direction[cross] + n_rows])
+            for i, kernel in enumerate(kernels):
+                values = np.bincount(
+                    bins, weights=weight * _mean_phi(kernel, g0, g1), minlength=2 * n_rows
                 )
+                out[i, rows] = values[:n_rows]
+                if half < directions:
+                    out[i, rows.start + half : rows.stop + half] = values[n_rows:]
     return out
 
 
@@ -634,7 +694,12 @@ def _check_directions(directions: int) -> int:
 def _pair(
     argument: ArrayLike, referent: ArrayLike, mask_tolerance: float
 ) -> tuple[_Region, _Region]:
-    a_arr, b_arr = np.asarray(argument), np.asarray(referent)
+    try:
+        a_arr, b_arr = np.asarray(argument), np.asarray(referent)
+    except (TypeError, ValueError) as exc:
+        raise InputError(
+            "argument/referent", f"cannot be read as vertex arrays or masks ({exc})"
+        ) from exc
     a_mask, b_mask = a_arr.dtype == np.bool_, b_arr.dtype == np.bool_
     if a_mask != b_mask:
         raise InputError(
@@ -660,7 +725,7 @@ def force_histogram(
     r: float = 2.0,
     directions: int = 180,
     *,
-    mask_tolerance: float = 0.25,
+    mask_tolerance: float = _MASK_TOLERANCE,
 ) -> FloatArray:
     """Histogram of forces ``F_r`` of ``argument`` (A) with respect to ``referent`` (B).
 
@@ -739,7 +804,7 @@ def force_histograms(
     r: Sequence[float] = (0.0, 2.0),
     directions: int = 180,
     *,
-    mask_tolerance: float = 0.25,
+    mask_tolerance: float = _MASK_TOLERANCE,
 ) -> FloatArray:
     """Several force histograms of one pair at once (the geometry is shared).
 
@@ -786,7 +851,7 @@ def hybrid_histogram(
     p1: float = 3.0,
     directions: int = 180,
     *,
-    mask_tolerance: float = 0.25,
+    mask_tolerance: float = _MASK_TOLERANCE,
 ) -> FloatArray:
     """Hybrid histogram F02: gravitational forces, constant below a distance ``Y0``.
 
@@ -842,7 +907,7 @@ def polygon_area(polygon: ArrayLike) -> float:
     >>> polygon_area([[0, 0], [2, 0], [2, 1], [0, 1]])
     2.0
     """
-    return _region(np.asarray(polygon), "polygon", 0.25).area
+    return _region(np.asarray(polygon), "polygon", _MASK_TOLERANCE).area
 
 
 def intersection_area(a: ArrayLike, b: ArrayLike) -> float:
@@ -858,7 +923,7 @@ def intersection_area(a: ArrayLike, b: ArrayLike) -> float:
     >>> intersection_area(sq, [[1, 1], [3, 1], [3, 3], [1, 3]])
     1.0
     """
-    ra, rb = _pair(a, b, 0.25)
+    ra, rb = _pair(a, b, _MASK_TOLERANCE)
     return _contact(ra, rb)[0]
 
 

@@ -68,6 +68,8 @@ class PipelineOptions:
         Take recognised objects' points from dense stereo inside their carried outline.
     dense_min_points : int
         Fewer valid dense points than this: fall back to the keypoints.
+    dense_max_points : int
+        Dense points used per object (an even random sample of the region's pixels).
     unknown : bool
         Cluster unlabelled keypoints into unknown objects.
     unknown_max_distance : float
@@ -90,6 +92,7 @@ class PipelineOptions:
     min_inliers: int = 8
     dense: bool = True
     dense_min_points: int = 30
+    dense_max_points: int = 400
     unknown: bool = True
     unknown_max_distance: float = 2.5
     min_points: int = 3
@@ -501,7 +504,9 @@ def _objects(
     skipped: list[Skipped] = []
     masks = {d.label: _outline_mask(d.outline_in_scene, shape) for d in labelling.detections}
     dense_xyz = (
-        _dense_regions(left, right, result, _visible_parts(masks, points, labels_arr))
+        _dense_regions(
+            left, right, result, _visible_parts(masks, points, labels_arr), opts.dense_max_points
+        )
         if opts.dense
         else {}
     )
@@ -584,12 +589,14 @@ def _dense_regions(
     right: NDArray[np.generic],
     result: Any,
     masks: Mapping[str, NDArray[np.bool_]],
+    max_points: int,
 ) -> dict[str, NDArray[np.float64]]:
     """3-D points of each recognised object's outline from dense stereo.
 
-    The stereo stage's own SGBM map (computed once per pair to verify the matches) is reused;
-    without one, SGBM runs once over the bounding box of all outlines and the disparity range
-    of the keypoints.
+    At most ``max_points`` per object (an even random sample: enough for outlier removal and
+    the hull). The stereo stage's own SGBM map (computed once per pair to verify the matches)
+    is reused; without one, SGBM runs once over the bounding box of all outlines and the
+    disparity range of the keypoints.
     """
     from scenespeak import stereo
 
@@ -609,7 +616,7 @@ def _dense_regions(
         )
     out: dict[str, NDArray[np.float64]] = {}
     for name, m in masks.items():
-        xyz, _ = stereo.region_points(dense, m)
+        xyz, _ = stereo.region_points(dense, m, max_points=max_points)
         out[name] = np.asarray(xyz, dtype=np.float64).reshape(-1, 3)
     return out
 
