@@ -785,16 +785,15 @@ def _histograms(
 ) -> tuple[NDArray[np.float64], NDArray[np.float64], bool]:
     from scenespeak import forces
 
-    f0 = np.asarray(forces.force_histogram(a, b, r=0.0, directions=directions), dtype=np.float64)
     if not intersecting:
         try:
-            f2 = np.asarray(
-                forces.force_histogram(a, b, r=2.0, directions=directions), dtype=np.float64
-            )
+            # One sweep gives both exponents (about half the time of two calls).
+            f0, f2 = forces.force_histograms(a, b, r=(0.0, 2.0), directions=directions)
             if np.all(np.isfinite(f2)):
-                return f0, f2, False
+                return np.asarray(f0, np.float64), np.asarray(f2, np.float64), False
         except (ScenespeakError, ValueError, ArithmeticError):
             pass  # touching objects: F2 undefined, fall through to the hybrid F02
+    f0 = np.asarray(forces.force_histogram(a, b, r=0.0, directions=directions), dtype=np.float64)
     f02 = forces.hybrid_histogram(a, b, directions=directions)
     return f0, np.asarray(f02, dtype=np.float64), True
 
