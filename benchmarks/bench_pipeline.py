@@ -202,12 +202,20 @@ def main(argv: list[str] | None = None) -> None:
     ap.add_argument("--pitched", action="store_true", help="the pitched rig")
     ap.add_argument("--runs", type=int, default=7)
     ap.add_argument("--min-visible", type=float, default=0.5)
+    ap.add_argument(
+        "--dataset", type=Path, help="use this dataset folder (docs/scenes.md format) instead"
+    )
     ap.add_argument("--cache", type=Path, default=Path(tempfile.gettempdir()) / "scenespeak-bench")
     args = ap.parse_args(argv)
     parts = args.only or ["timing", "bands", "database"]
     args.cache.mkdir(parents=True, exist_ok=True)
     if "timing" in parts or "bands" in parts:
-        root, db = dataset(args.cache, args.scenes, args.seed, args.pitched)
+        if args.dataset is not None:
+            root, db = args.dataset, args.dataset / "objects.db"
+            if not db.exists():
+                database_from_dataset(root, db)
+        else:
+            root, db = dataset(args.cache, args.scenes, args.seed, args.pitched)
         if "timing" in parts:
             timing(root, db, args.runs)
         if "bands" in parts:

@@ -391,8 +391,8 @@ if _has_module("scenespeak.evaluation"):
             with progress:
                 task = progress.add_task("describing scenes", total=None)
 
-                def advance(*_: Any, **__: Any) -> None:
-                    progress.advance(task)
+                def advance(done: int, total: int) -> None:
+                    progress.update(task, completed=done, total=total)
 
                 result = evaluate(dataset, db=db, workers=workers, progress=advance)
         _echo(json.dumps(result.to_dict()) if as_json else format_table(result))

@@ -47,7 +47,6 @@ from scenespeak.errors import InputError
 __all__ = [
     "UNLABELLED_COLOR",
     "label_colors",
-    "plane_basis",
     "plot_histograms",
     "plot_hulls",
     "plot_matches",
@@ -260,34 +259,6 @@ def plot_matches(
     return fig
 
 
-def plane_basis(up: ArrayLike = (0.0, -1.0, 0.0)) -> NDArray[np.float64]:
-    """The horizontal plane's frame in left-camera coordinates (interfaces.md).
-
-    Returns a 3 x 3 matrix whose rows are x (the camera's right direction projected onto the
-    horizontal plane), y (its forward direction projected, i.e. depth) and z (up); a point ``P``
-    of the camera frame has world-like coordinates ``basis @ P``.
-
-    Examples
-    --------
-    >>> plane_basis([0, -1, 0]).round(3).tolist()
-    [[1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, -1.0, 0.0]]
-    """
-    u = np.asarray(up, dtype=np.float64).reshape(3)
-    norm = float(np.linalg.norm(u))
-    if not np.isfinite(norm) or norm < 1e-12:
-        raise InputError("up", f"the up direction {u.tolist()} must be a non-zero 3-vector")
-    u = u / norm
-    fwd = np.array([0.0, 0.0, 1.0]) - u[2] * u
-    if np.linalg.norm(fwd) < 1e-6:  # looking straight up or down: use the right direction
-        x = np.array([1.0, 0.0, 0.0]) - u[0] * u
-        x /= np.linalg.norm(x)
-        y = np.cross(u, x)
-    else:
-        y = fwd / np.linalg.norm(fwd)
-        x = np.cross(y, u)
-    return np.vstack([x, y, u])
-
-
 def plot_points_3d(
     xyz: ArrayLike,
     labels: Sequence[str | None] | NDArray[Any] | None = None,
@@ -329,6 +300,8 @@ def plot_points_3d(
     pts = _as_points(xyz, 3, "xyz")
     labs = _as_labels(labels, len(pts), "labels")
     colors = label_colors(labs) if colors is None else colors
+    from scenespeak.objects import plane_basis
+
     world = pts @ plane_basis(up).T
 
     fig = Figure(figsize=figsize, dpi=dpi, layout="constrained")
@@ -413,8 +386,8 @@ def plot_hulls(
     --------
     >>> square = [[0, 1], [0.2, 1], [0.2, 1.2], [0, 1.2]]
     >>> fig = plot_hulls({"mug": square})
-    >>> [t.get_text() for t in fig.axes[0].texts]
-    ['mug']
+    >>> [t.get_text() for t in fig.axes[0].texts][0]
+    'mug'
     """
     from matplotlib.patches import Polygon
 
@@ -783,13 +756,17 @@ def plot_report(
     panels = _scene_figures(view, pair)
     fig = Figure(figsize=(16.0, 10.0), dpi=100, layout="constrained")
     grid = fig.add_gridspec(2, 3, width_ratios=[1.0, 1.0, 0.85])
-    slots = [grid[0, 0:2], grid[1, 0], grid[1, 1], grid[0, 2]]
-    for (name, build), slot in zip(panels, slots, strict=False):
-        ax = fig.add_subplot(slot)
+    slots = {
+        "matches": grid[0, 0:2],
+        "points3d": grid[1, 0],
+        "hulls": grid[1, 1],
+        "histograms": grid[1, 2],
+    }
+    for name, build in panels:
+        ax = fig.add_subplot(slots[name])
         ax.imshow(_render(build(), dpi=90.0))
         ax.set_axis_off()
-        ax.set_title(name, fontsize="small", color="0.4")
-    tax = fig.add_subplot(grid[1, 2] if len(panels) >= 4 else grid[:, 2])
+    tax = fig.add_subplot(grid[0, 2])
     tax.set_axis_off()
     tax.text(
         0.0, 1.0, _report_text(view), va="top", ha="left", wrap=True, fontsize=10, family="serif"
