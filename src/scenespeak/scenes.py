@@ -1,810 +1,659 @@
-"""Rendered stereo scenes of textured household objects, with their ground truth.
+"""The scene generator: rendered stereo pairs of photo-textured objects with their ground truth.
 
-pybullet's CPU TinyRenderer (``pip install scenespeak[scenes]``) renders boxes, cylinders and
-flat cards textured with photographs that ship with scikit-image, standing on a plain floor
-0.5–2 m in front of a parallel stereo rig (level or pitched), like the paper's experiment. Every
-scene folder holds the stereo pair, its calibration, a label image and ``truth.json``: each
-object's centroid, footprint, distance and visible fraction, and the reference relation of every
-ordered pair. ``objects/<label>/`` holds training views with masks for the object database.
-The folder format and the ground-truth rule are documented in ``docs/scenes.md``.
+Scenes are rendered with pybullet's CPU TinyRenderer (the ``scenes`` extra) at 2x and area
+averaged; textures are photographs shipped with scikit-image. The folder format, the
+ground-truth rule and timings are in ``docs/scenes.md``.
 
-Examples
---------
+>>> import tempfile
 >>> from scenespeak.scenes import generate_dataset, load_dataset, load_truth
->>> ds = generate_dataset("scenes", n_scenes=2, seed=0)  # doctest: +SKIP
->>> truth = load_truth(load_dataset(ds).scenes[0])  # doctest: +SKIP
->>> [(r.argument, r.referent, r.primary) for r in truth.relations][:1]  # doctest: +SKIP
-[('mug', 'box', 'left')]
+>>> out = generate_dataset(tempfile.mkdtemp() + "/ds", 1, seed=3, image_size=(160, 120))
+>>> truth = load_truth(load_dataset(out).scenes[0])
+>>> 3 <= len(truth.objects) <= 5
+True
 """
 
 from __future__ import annotations
 
 import json
-import math
 import os
 import shutil
 import tempfile
-from collections.abc import Callable, Iterable, Mapping, Sequence
-from dataclasses import dataclass
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
 from os import PathLike
 from pathlib import Path
 from typing import Any, Literal
 
 import cv2
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import NDArray
 
-from scenespeak import _render
+from scenespeak._render import Camera, MeshSpec, cylinder_outline, downsample_labels, render
 from scenespeak.calibration import ground_basis
 from scenespeak.errors import InputError
 
 __all__ = [
     "CATALOGUE",
-    "DATASET_FORMAT",
+    "FORMAT",
     "CatalogueObject",
     "Dataset",
-    "ObjectTruth",
     "Placement",
-    "RelationTruth",
-    "RigTruth",
+    "Rig",
     "SceneTruth",
+    "TruthObject",
+    "TruthRelation",
+    "footprint_relation",
     "generate_dataset",
-    "generate_object_views",
     "generate_scene",
-    "ground_truth_relations",
     "load_dataset",
     "load_truth",
-    "primary_direction",
+    "make_rig",
+    "sample_layout",
 ]
 
-DATASET_FORMAT = "scenespeak-scenes/1"
-
-#: Height of the left camera above the floor for a level and a pitched rig, metres.
-LEVEL_CAMERA_HEIGHT = 0.20
-PITCHED_CAMERA_HEIGHT = 0.50
-#: Default downward pitch of a pitched rig, degrees.
-DEFAULT_PITCH_DEG = 20.0
-#: A relation is ambiguous when its direction is within this many degrees of a diagonal.
-AMBIGUOUS_MARGIN_DEG = 20.0
-#: ... or when either object is less visible than this in the left image.
-AMBIGUOUS_VISIBLE_FRACTION = 0.5
-#: Distance range of object centroids from the left camera, metres (the paper's 50–200 cm).
-DISTANCE_RANGE = (0.5, 2.0)
-
-Shape = Literal["box", "cylinder", "card"]
-Direction = Literal["right", "behind", "left", "front"]
-_DIRECTIONS: tuple[Direction, ...] = ("right", "behind", "left", "front")
+FORMAT = "scenespeak-scenes/1"
+SUPERSAMPLE = 2
+DIAGONAL_TOLERANCE_DEG = 20.0
+HIDDEN_THRESHOLD = 0.5
+CLEARANCE = 0.03
+VIEW_YAWS = (0.0, 30.0, -30.0, 180.0)
 
 
 @dataclass(frozen=True)
 class CatalogueObject:
-    """An object that scenes are made of.
-
-    Attributes
-    ----------
-    label : str
-        Its name (unique in a catalogue), used as the folder name of its training views.
-    shape : {"box", "cylinder", "card"}
-        Box, upright cylinder, or a thin standing card (a box a few millimetres deep).
-    size : (float, float, float)
-        Width (x), depth (y) and height (z) in metres when it faces the camera; for a cylinder
-        width and depth are its diameters.
-    texture : str
-        Name of the scikit-image photograph on its faces (``skimage.data.<texture>()``).
-    """
+    """A catalogue object: label, shape (``box``, ``cylinder``, ``card``), size (w, d, h) in
+    metres (width along its front, depth, height) and a scikit-image photograph name."""
 
     label: str
-    shape: Shape
+    shape: str
     size: tuple[float, float, float]
     texture: str
 
-    def to_dict(self) -> dict[str, Any]:
-        """The ``dataset.json`` entry of this object."""
-        return {
-            "label": self.label,
-            "shape": self.shape,
-            "size": list(self.size),
-            "texture": self.texture,
-        }
 
-
-#: The default catalogue: sizes of real household objects, photographs from scikit-image.
+#: The fixed catalogue: sizes of real household objects.
 CATALOGUE: tuple[CatalogueObject, ...] = (
-    CatalogueObject("box", "box", (0.16, 0.06, 0.22), "astronaut"),
-    CatalogueObject("mug", "cylinder", (0.085, 0.085, 0.095), "coffee"),
-    CatalogueObject("can", "cylinder", (0.066, 0.066, 0.122), "rocket"),
-    CatalogueObject("card", "card", (0.15, 0.004, 0.105), "chelsea"),
-    CatalogueObject("book", "box", (0.15, 0.03, 0.21), "immunohistochemistry"),
-    CatalogueObject("carton", "box", (0.095, 0.095, 0.20), "hubble_deep_field"),
-    CatalogueObject("tin", "cylinder", (0.10, 0.10, 0.14), "colorwheel"),
+    CatalogueObject("box", "box", (0.19, 0.07, 0.27), "astronaut"),  # cereal box
+    CatalogueObject("book", "box", (0.16, 0.03, 0.23), "coffee"),  # upright book
+    CatalogueObject("card", "card", (0.18, 0.012, 0.13), "chelsea"),  # photo card / frame
+    CatalogueObject("can", "cylinder", (0.066, 0.066, 0.122), "rocket"),  # drink can
+    CatalogueObject("mug", "cylinder", (0.085, 0.085, 0.095), "immunohistochemistry"),
+    CatalogueObject("tin", "cylinder", (0.10, 0.10, 0.16), "hubble_deep_field"),  # coffee tin
+    CatalogueObject("shoebox", "box", (0.32, 0.19, 0.11), "camera"),
 )
 
 
 @dataclass(frozen=True)
+class Rig:
+    """A parallel stereo rig in the world (Z up, floor z = 0), looking along world +Y.
+
+    ``height`` is the left camera's height above the floor, ``pitch_deg`` the downward pitch.
+    """
+
+    pitch_deg: float = 0.0
+    height: float = 0.25
+    baseline: float = 0.12
+    hfov_deg: float = 60.0
+    image_size: tuple[int, int] = (640, 480)
+
+    def camera(self, which: Literal["left", "right"] = "left") -> Camera:
+        """The left or right camera (right = left shifted by the baseline along its X axis)."""
+        a = np.radians(self.pitch_deg)
+        right = np.array([1.0, 0.0, 0.0])
+        forward = np.array([0.0, np.cos(a), -np.sin(a)])
+        down = np.array([0.0, -np.sin(a), -np.cos(a)])
+        eye = np.array([0.0, 0.0, self.height])
+        if which == "right":
+            eye = eye + self.baseline * right
+        return Camera(
+            tuple(eye), tuple(right), tuple(down), tuple(forward), self.image_size, self.hfov_deg
+        )
+
+    @property
+    def up(self) -> NDArray[np.float64]:
+        """World up in the left camera's OpenCV frame."""
+        return self.camera().rotation @ np.array([0.0, 0.0, 1.0])
+
+    def calibration(self) -> dict[str, Any]:
+        """The calibration JSON: short form for a level rig, full form for a pitched one."""
+        up = [round(float(v), 12) + 0.0 for v in self.up]
+        if self.pitch_deg == 0:
+            return {
+                "baseline": self.baseline,
+                "hfov_deg": self.hfov_deg,
+                "image_size": list(self.image_size),
+                "up": up,
+            }
+        k = self.camera().intrinsics(SUPERSAMPLE).tolist()
+        return {
+            "image_size": list(self.image_size),
+            "K_left": k,
+            "K_right": k,
+            "dist_left": [0.0] * 5,
+            "dist_right": [0.0] * 5,
+            "R": np.eye(3).tolist(),
+            "T": [-self.baseline, 0.0, 0.0],
+            "up": up,
+        }
+
+
+def make_rig(
+    pitched: bool,
+    *,
+    image_size: tuple[int, int] = (640, 480),
+    hfov_deg: float = 60.0,
+    baseline: float = 0.12,
+    pitch_deg: float = 25.0,
+) -> Rig:
+    """The level rig (0.25 m high) or the pitched rig (0.45 m high, ``pitch_deg`` down)."""
+    if pitched:
+        return Rig(pitch_deg, 0.45, baseline, hfov_deg, tuple(image_size))
+    return Rig(0.0, 0.25, baseline, hfov_deg, tuple(image_size))
+
+
+@dataclass(frozen=True)
 class Placement:
-    """Where an object stands: floor position, turn about the vertical, base height.
+    """A catalogue object placed in the world: base centre ``position`` (x, y, z) and yaw."""
 
-    Attributes
-    ----------
-    label : str
-        The catalogue label.
-    x, y : float
-        Position of the object's vertical axis on the floor, metres, in the horizontal plane's
-        2-D frame (x right, y forward from the point below the left camera).
-    yaw_deg : float
-        Turn about the vertical axis, degrees, counter-clockwise seen from above; 0 = its front
-        faces the camera.
-    base : float
-        Height of its bottom above the floor (0 on the floor; the top of another object when
-        stacked).
-    """
+    obj: CatalogueObject
+    position: tuple[float, float, float]
+    yaw_deg: float
+    on: str | None = None
 
-    label: str
-    x: float
-    y: float
-    yaw_deg: float = 0.0
-    base: float = 0.0
+    def footprint_world(self) -> NDArray[np.float64]:
+        """Outline of the base in world (x, y), counter-clockwise."""
+        w, d, _ = self.obj.size
+        if self.obj.shape == "cylinder":
+            local = cylinder_outline(w / 2)
+        else:
+            local = np.array([[-w / 2, -d / 2], [w / 2, -d / 2], [w / 2, d / 2], [-w / 2, d / 2]])
+        a = np.radians(self.yaw_deg)
+        rot = np.array([[np.cos(a), -np.sin(a)], [np.sin(a), np.cos(a)]])
+        return local @ rot.T + np.asarray(self.position[:2])
 
+    def corners_world(self) -> NDArray[np.float64]:
+        """Vertices of the object's (prism) hull in the world, ``(2n, 3)``."""
+        fp = self.footprint_world()
+        z0 = self.position[2]
+        z1 = z0 + self.obj.size[2]
+        return np.vstack([np.c_[fp, np.full(len(fp), z0)], np.c_[fp, np.full(len(fp), z1)]])
 
-@dataclass(frozen=True)
-class ObjectTruth:
-    """The ground truth of one object of a scene (an entry of ``truth.json``)."""
+    def centroid_world(self) -> NDArray[np.float64]:
+        """Centre of the object's volume."""
+        x, y, z = self.position
+        return np.array([x, y, z + self.obj.size[2] / 2])
 
-    label: str
-    index: int
-    centroid: tuple[float, float, float]
-    footprint: tuple[tuple[float, float], ...]
-    distance: float
-    visible_fraction: float
-    shape: str = ""
-    size: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    yaw_deg: float = 0.0
-    base: float = 0.0
-    bbox_left: tuple[int, int, int, int] = (0, 0, 0, 0)
-
-    @property
-    def footprint_array(self) -> NDArray[np.float64]:
-        """The footprint as an ``(N, 2)`` array."""
-        return np.asarray(self.footprint, dtype=np.float64).reshape(-1, 2)
-
-
-@dataclass(frozen=True)
-class RelationTruth:
-    """The reference relation of an ordered pair: where the argument is from the referent."""
-
-    argument: str
-    referent: str
-    primary: Direction
-    ambiguous: bool
-    angle_deg: float = float("nan")
-    reason: str = ""
-
-
-@dataclass(frozen=True)
-class RigTruth:
-    """The rig a scene was rendered with."""
-
-    pitch_deg: float
-    baseline: float
-    hfov_deg: float
-    image_size: tuple[int, int]
-    camera_height: float = 0.0
-
-
-@dataclass(frozen=True)
-class SceneTruth:
-    """Everything ``truth.json`` says about a scene.
-
-    Attributes
-    ----------
-    scene_dir : Path
-        The scene folder.
-    objects : tuple of ObjectTruth
-        The objects, in the order of their index in ``left_labels.png`` (index 1 first).
-    relations : tuple of RelationTruth
-        Every ordered pair of distinct objects.
-    rig : RigTruth
-        The rig.
-    up : (float, float, float)
-        The world's up direction in the left camera frame (as in ``calib.json``).
-    """
-
-    scene_dir: Path
-    objects: tuple[ObjectTruth, ...]
-    relations: tuple[RelationTruth, ...]
-    rig: RigTruth
-    up: tuple[float, float, float] = (0.0, -1.0, 0.0)
-
-    @property
-    def left(self) -> Path:
-        """The left image."""
-        return self.scene_dir / "left.png"
-
-    @property
-    def right(self) -> Path:
-        """The right image."""
-        return self.scene_dir / "right.png"
-
-    @property
-    def calib(self) -> Path:
-        """The calibration file."""
-        return self.scene_dir / "calib.json"
-
-    @property
-    def labels(self) -> tuple[str, ...]:
-        """The object labels in index order."""
-        return tuple(o.label for o in self.objects)
-
-    def object(self, label: str) -> ObjectTruth:
-        """The object called ``label`` (``KeyError`` if the scene has none)."""
-        for o in self.objects:
-            if o.label == label:
-                return o
-        raise KeyError(label)
-
-    def relation(self, argument: str, referent: str) -> RelationTruth:
-        """The relation of ``argument`` to ``referent`` (``KeyError`` if absent)."""
-        for r in self.relations:
-            if r.argument == argument and r.referent == referent:
-                return r
-        raise KeyError((argument, referent))
-
-
-@dataclass(frozen=True)
-class Dataset:
-    """A generated dataset folder (see :func:`load_dataset`)."""
-
-    path: Path
-    seed: int
-    objects: tuple[CatalogueObject, ...]
-    scenes: tuple[Path, ...]
-    complete: bool = True
-
-    def views(self, label: str) -> tuple[Path, ...]:
-        """The training views of ``label`` (images only; each has a ``*_mask.png``)."""
-        d = self.path / "objects" / label
-        return tuple(sorted(p for p in d.glob("view_*.png") if not p.stem.endswith("_mask")))
+    def mesh(self) -> MeshSpec:
+        shape = "cylinder" if self.obj.shape == "cylinder" else "box"
+        return MeshSpec(shape, self.obj.size, self.obj.texture, self.position, self.yaw_deg)
 
 
 # --------------------------------------------------------------------------------------------
-# geometry and the ground-truth rule
+# geometry
 
 
-def _polygon_centroid(poly: NDArray[np.float64]) -> NDArray[np.float64]:
-    x, y = poly[:, 0], poly[:, 1]
-    x1, y1 = np.roll(x, -1), np.roll(y, -1)
-    c = x * y1 - x1 * y
-    a = c.sum() / 2.0
-    if abs(a) < 1e-15:
-        return poly.mean(axis=0)
-    return np.array([((x + x1) * c).sum(), ((y + y1) * c).sum()]) / (6.0 * a)
-
-
-def _convex_overlap(a: NDArray[np.float64], b: NDArray[np.float64]) -> bool:
-    """Whether two convex polygons overlap (separating-axis test; touching counts as apart)."""
+def _sat_gap(a: NDArray[np.float64], b: NDArray[np.float64]) -> float:
+    """Largest separating gap between two convex polygons (negative when they overlap)."""
+    best = -np.inf
     for poly in (a, b):
         edges = np.roll(poly, -1, axis=0) - poly
-        for e in edges:
-            n = np.array([-e[1], e[0]])
-            if not np.any(n):
-                continue
-            pa, pb = a @ n, b @ n
-            if pa.max() <= pb.min() + 1e-12 or pb.max() <= pa.min() + 1e-12:
-                return False
-    return True
+        normals = np.c_[edges[:, 1], -edges[:, 0]]
+        normals /= np.linalg.norm(normals, axis=1, keepdims=True)
+        pa, pb = a @ normals.T, b @ normals.T
+        gap = np.maximum(pb.min(0) - pa.max(0), pa.min(0) - pb.max(0))
+        best = max(best, float(gap.max()))
+    return best
 
 
-def primary_direction(angle_deg: float) -> tuple[Direction, float]:
-    """The nearest of the four directions to an angle and how far the angle is from a diagonal.
-
-    Angles follow interfaces.md: 0° right, 90° behind, 180° left, 270° in front.
-
-    Examples
-    --------
-    >>> primary_direction(100.0)
-    ('behind', 35.0)
-    >>> primary_direction(-40.0)
-    ('right', 5.0)
-    """
-    a = float(angle_deg) % 360.0
-    k = int(((a + 45.0) // 90.0) % 4)
-    from_diagonal = abs((a % 90.0) - 45.0)
-    return _DIRECTIONS[k], round(from_diagonal, 9)
+def _silhouette(cam: Camera, pl: Placement) -> NDArray[np.float64]:
+    """Convex silhouette of a placed object in final-image pixels."""
+    uv = cam.project(pl.corners_world(), SUPERSAMPLE).astype(np.float32)
+    return cv2.convexHull(uv).reshape(-1, 2).astype(np.float64)
 
 
-def ground_truth_relations(
-    footprints: Mapping[str, ArrayLike],
-    visible_fraction: Mapping[str, float] | None = None,
-    *,
-    margin_deg: float = AMBIGUOUS_MARGIN_DEG,
-    min_visible: float = AMBIGUOUS_VISIBLE_FRACTION,
-) -> list[RelationTruth]:
-    """The reference relation of every ordered pair of objects, from their footprints.
+def _raster(poly: NDArray[np.float64], size: tuple[int, int], scale: float) -> NDArray[np.bool_]:
+    w, h = size
+    img = np.zeros((int(h * scale), int(w * scale)), np.uint8)
+    pts = np.round((poly + 0.5) * scale * 16 - 8).astype(np.int32)
+    cv2.fillPoly(img, [pts], 1, lineType=cv2.LINE_8, shift=4)
+    return img.astype(bool)
 
-    The rule (documented in ``docs/scenes.md``): the direction of the vector from the
-    referent's footprint centroid to the argument's, in the horizontal plane's 2-D frame, gives
-    the angle; ``primary`` is the nearest of right (0°), behind (90°), left (180°) and front
-    (270°). The relation is ``ambiguous`` when that angle is within ``margin_deg`` of a diagonal
-    (45°, 135°, ...), when the two footprints overlap (one object stands on the other), or when
-    either object is less than ``min_visible`` visible in the left image.
 
-    Parameters
-    ----------
-    footprints : mapping of label to (N, 2) array
-        Convex outlines in the horizontal plane.
-    visible_fraction : mapping of label to float, optional
-        Fraction of each object seen in the left image.
+def _poly_area(poly: NDArray[np.float64]) -> float:
+    x, y = poly[:, 0], poly[:, 1]
+    return 0.5 * abs(float(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1))))
+
+
+def footprint_relation(
+    argument: NDArray[np.float64], referent: NDArray[np.float64]
+) -> tuple[str, float, bool]:
+    """Ground-truth relation of two footprints in the horizontal plane's 2-D frame.
+
+    The direction of the vector from the referent's footprint centroid to the argument's gives
+    the primary direction: the nearest of 0° right, 90° behind, 180° left, 270° front. The
+    relation is ambiguous (on this count) when that direction is within ±20° of a diagonal, or
+    when the footprints overlap.
 
     Returns
     -------
-    list of RelationTruth
-        Pairs in the order of ``footprints`` (argument outer, referent inner).
+    primary, angle_deg, ambiguous
 
     Examples
     --------
-    >>> sq = lambda x, y: [[x, y], [x + 0.1, y], [x + 0.1, y + 0.1], [x, y + 0.1]]
-    >>> rels = ground_truth_relations({"hat": sq(-0.5, 1.0), "mug": sq(0.0, 1.05)})
-    >>> [(r.argument, r.primary, r.ambiguous) for r in rels]
-    [('hat', 'left', False), ('mug', 'right', False)]
+    >>> import numpy as np
+    >>> sq = np.array([[0, 0], [1, 0], [1, 1], [0, 1.0]])
+    >>> footprint_relation(sq - [3, 0], sq)[0]
+    'left'
+    >>> footprint_relation(sq + [0, 3], sq)[0]
+    'behind'
     """
-    polys = {k: np.asarray(v, dtype=np.float64).reshape(-1, 2) for k, v in footprints.items()}
-    cents = {k: _polygon_centroid(p) for k, p in polys.items()}
-    vis = dict(visible_fraction or {})
-    out: list[RelationTruth] = []
-    for a in polys:
-        for b in polys:
-            if a == b:
-                continue
-            v = cents[a] - cents[b]
-            angle = math.degrees(math.atan2(v[1], v[0])) % 360.0
-            primary, from_diag = primary_direction(angle)
-            reasons = []
-            if from_diag < margin_deg:
-                reasons.append(f"direction {angle:.1f} deg is within {margin_deg:g} deg of a diagonal")
-            if _convex_overlap(polys[a], polys[b]):
-                reasons.append("footprints overlap")
-            hidden = [k for k in (a, b) if vis.get(k, 1.0) < min_visible]
-            if hidden:
-                reasons.append(f"{' and '.join(hidden)} less than {min_visible:.0%} visible")
-            out.append(RelationTruth(a, b, primary, bool(reasons), round(angle, 6), "; ".join(reasons)))
-    return out
+    ca, cr = _poly_centroid(argument), _poly_centroid(referent)
+    v = ca - cr
+    angle = float(np.degrees(np.arctan2(v[1], v[0])) % 360.0)
+    names = ("right", "behind", "left", "front")
+    primary = names[int(np.round(angle / 90.0)) % 4]
+    off = abs(((angle - 45.0) % 90.0) - 45.0)  # distance to the nearest axis, 0..45
+    diagonal = off > 45.0 - DIAGONAL_TOLERANCE_DEG
+    overlap = _sat_gap(np.asarray(argument, float), np.asarray(referent, float)) <= 0
+    return primary, angle, bool(diagonal or overlap)
 
 
-def _outline(obj: CatalogueObject, n: int = 32) -> NDArray[np.float64]:
-    """The object's outline on the floor around its own axis (N, 2), counter-clockwise."""
-    w, d, _ = obj.size
-    if obj.shape == "cylinder":
-        t = 2 * np.pi * np.arange(n) / n
-        return np.column_stack([w / 2 * np.cos(t), d / 2 * np.sin(t)])
-    return np.array([[-w / 2, -d / 2], [w / 2, -d / 2], [w / 2, d / 2], [-w / 2, d / 2]])
-
-
-def _world_vertices(obj: CatalogueObject, pl: Placement) -> NDArray[np.float64]:
-    """Hull vertices of a placed object in world coordinates (N, 3)."""
-    base = (
-        _render.cylinder_vertices(obj.size, 32)
-        if obj.shape == "cylinder"
-        else _render.box_vertices(obj.size)
-    )
-    return _rotz(pl.yaw_deg) @ base.T + np.array([[pl.x], [pl.y], [pl.base + obj.size[2] / 2]])
-
-
-def _rotz(deg: float) -> NDArray[np.float64]:
-    a = math.radians(deg)
-    c, s = math.cos(a), math.sin(a)
-    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+def _poly_centroid(poly: NDArray[np.float64]) -> NDArray[np.float64]:
+    p = np.asarray(poly, float)
+    x, y = p[:, 0], p[:, 1]
+    xn, yn = np.roll(x, -1), np.roll(y, -1)
+    cross = x * yn - xn * y
+    a = cross.sum() / 2
+    if abs(a) < 1e-15:
+        return p.mean(axis=0)
+    return np.array([((x + xn) * cross).sum(), ((y + yn) * cross).sum()]) / (6 * a)
 
 
 # --------------------------------------------------------------------------------------------
 # layouts
 
 
-def _rig(pitch_deg: float, camera_height: float | None, baseline: float, size, hfov):  # type: ignore[no-untyped-def]
-    h = camera_height
-    if h is None:
-        h = PITCHED_CAMERA_HEIGHT if abs(pitch_deg) > 1e-9 else LEVEL_CAMERA_HEIGHT
-    return h, _render.rig_cameras(
-        height=h, pitch_deg=pitch_deg, baseline=baseline, image_size=size, hfov_deg=hfov
-    )
-
-
-def _hull_mask(px: NDArray[np.float64], size: tuple[int, int], scale: float) -> NDArray[np.bool_]:
-    w, h = int(round(size[0] * scale)), int(round(size[1] * scale))
-    hull = cv2.convexHull(((px + 0.5) * scale * 16).astype(np.int32))
-    m = np.zeros((h, w), np.uint8)
-    cv2.fillConvexPoly(m, hull, 1, lineType=cv2.LINE_8, shift=4)
-    return m.astype(bool)
-
-
-def _sample_layout(
-    rng: np.random.Generator,
-    objects: Sequence[CatalogueObject],
-    cams: tuple[_render.Camera, _render.Camera],
+def sample_layout(
+    seed: int | Sequence[int],
+    rig: Rig,
     *,
-    stack: bool,
-    max_tries: int = 400,
-) -> list[Placement]:
-    """Random placements: on the floor, in both images, apart, mostly unoccluded."""
-    left, right = cams
-    size = (left.width, left.height)
-    margin = 4.0
-    half = math.radians(left.hfov_deg) / 2
-    placed: list[tuple[CatalogueObject, Placement]] = []
-    todo = list(objects)
-    stacked_on: tuple[CatalogueObject, CatalogueObject] | None = None
-    if stack and len(todo) >= 2:
-        # the seed paper's mug-on-can case: the first cylinder (or last object) on the first box
-        top = next((o for o in todo if o.shape == "cylinder"), todo[-1])
-        bottom = next((o for o in todo if o is not top and o.shape != "card"), None)
-        if bottom is not None:
-            todo.remove(top)
-            stacked_on = (top, bottom)
-    for obj in todo:
-        for _ in range(max_tries):
-            rho = rng.uniform(*DISTANCE_RANGE)
-            phi = rng.uniform(-half * 0.85, half * 0.85)
-            pl = Placement(
-                obj.label,
-                float(rho * math.sin(phi)),
-                float(rho * math.cos(phi)),
-                float(rng.uniform(-30.0, 30.0)),
-            )
-            if _acceptable(obj, pl, placed, left, right, size, margin):
-                placed.append((obj, pl))
+    catalogue: Sequence[CatalogueObject] = CATALOGUE,
+    n_objects: int | None = None,
+    stacked: bool = False,
+    distance_range: tuple[float, float] = (0.5, 2.0),
+    min_visible: float = 0.6,
+    max_tries: int = 4000,
+) -> tuple[Placement, ...]:
+    """Random layout of 3-5 distinct catalogue objects on the floor, fixed by ``seed``.
+
+    Objects stand on the floor (one may stand on another when ``stacked``), their centroids
+    ``distance_range`` metres from the left camera, footprints at least 3 cm apart, wholly
+    inside both images, and each at least ``min_visible`` unoccluded (estimated from the
+    silhouettes in depth order).
+    """
+    rng = np.random.default_rng(seed)
+    n = int(n_objects) if n_objects is not None else int(rng.integers(3, 6))
+    if not 1 <= n <= len(catalogue):
+        raise InputError("n_objects", f"must be between 1 and {len(catalogue)}, got {n}")
+    left, right = rig.camera("left"), rig.camera("right")
+    w, h = rig.image_size
+    half = np.tan(np.radians(rig.hfov_deg) / 2)
+    for _ in range(50):
+        chosen = [catalogue[i] for i in rng.choice(len(catalogue), n, replace=False)]
+        placed: list[Placement] = []
+        top: CatalogueObject | None = None
+        if stacked and n >= 2:
+            top = chosen[-1]
+            chosen = chosen[:-1]
+        for obj in chosen:
+            for _t in range(max_tries // 50):
+                y = rng.uniform(0.3, distance_range[1])
+                x = rng.uniform(-half * y, half * y)
+                yaw = rng.uniform(0, 360) if obj.shape == "cylinder" else rng.uniform(-35.0, 35.0)
+                pl = Placement(obj, (float(x), float(y), 0.0), float(yaw))
+                if _fits(pl, placed, left, right, rig, distance_range):
+                    placed.append(pl)
+                    break
+            else:
                 break
-        else:
-            raise RuntimeError(f"could not place {obj.label} after {max_tries} tries")
-    if stacked_on is not None:
-        top, bottom = stacked_on
-        pb = next(p for o, p in placed if o is bottom)
-        pl = Placement(top.label, pb.x, pb.y, float(rng.uniform(-30, 30)), bottom.size[2])
-        placed.append((top, pl))
-    order = {o.label: i for i, o in enumerate(objects)}
-    placed.sort(key=lambda t: order[t[0].label])
-    return [p for _, p in placed]
+        if len(placed) != len(chosen):
+            continue
+        if top is not None:
+            bases = [
+                b
+                for b in placed
+                if b.obj.shape != "card"
+                and _sat_gap(
+                    Placement(top, (*b.position[:2], 0.0), 0.0).footprint_world(),
+                    _shrink(b.footprint_world(), 0.005),
+                )
+                < -min(top.size[0], top.size[1]) * 0.999
+            ]
+            if not bases:
+                continue
+            base = bases[int(rng.integers(len(bases)))]
+            pl = Placement(
+                top,
+                (base.position[0], base.position[1], base.obj.size[2]),
+                float(rng.uniform(0, 360) if top.shape == "cylinder" else base.yaw_deg),
+                on=base.obj.label,
+            )
+            if not _in_view(pl, left, right, w, h):
+                continue
+            placed.append(pl)
+        if min(_visible_estimate(placed, left, rig.image_size)) >= min_visible:
+            return tuple(placed)
+    raise InputError(f"seed {seed}", "no layout found; use fewer objects or a wider range")
 
 
-def _acceptable(
-    obj: CatalogueObject,
-    pl: Placement,
-    placed: list[tuple[CatalogueObject, Placement]],
-    left: _render.Camera,
-    right: _render.Camera,
-    size: tuple[int, int],
-    margin: float,
-) -> bool:
-    V = _world_vertices(obj, pl).T
-    centre = np.array([pl.x, pl.y, pl.base + obj.size[2] / 2])
-    dist = float(np.linalg.norm(left.to_camera(centre[None])[0]))
-    if not DISTANCE_RANGE[0] <= dist <= DISTANCE_RANGE[1]:
-        return False
+def _shrink(poly: NDArray[np.float64], by: float) -> NDArray[np.float64]:
+    c = poly.mean(axis=0)
+    d = poly - c
+    r = np.linalg.norm(d, axis=1, keepdims=True)
+    return c + d * np.maximum(r - by, 0) / r
+
+
+def _in_view(pl: Placement, left: Camera, right: Camera, w: int, h: int) -> bool:
     for cam in (left, right):
-        if np.any(cam.to_camera(V)[:, 2] < 0.1):
+        if (cam.to_camera(pl.corners_world())[:, 2] < 0.1).any():
             return False
-        px = cam.project(V)
-        if (
-            px[:, 0].min() < margin
-            or px[:, 1].min() < margin
-            or px[:, 0].max() > size[0] - 1 - margin
-            or px[:, 1].max() > size[1] - 1 - margin
-        ):
-            return False
-    fp = (_rotz(pl.yaw_deg)[:2, :2] @ _outline(obj).T).T + [pl.x, pl.y]
-    scale = 0.25
-    mine = _hull_mask(left.project(V), size, scale)
-    area = max(int(mine.sum()), 1)
-    for o2, p2 in placed:
-        fp2 = (_rotz(p2.yaw_deg)[:2, :2] @ _outline(o2).T).T + [p2.x, p2.y]
-        grown = fp2 + 0.03 * np.sign(fp2 - fp2.mean(axis=0))
-        if _convex_overlap(fp, grown) or np.linalg.norm(_polygon_centroid(fp) - _polygon_centroid(fp2)) < 0.12:
-            return False
-        other = _hull_mask(left.project(_world_vertices(o2, p2).T), size, scale)
-        if (mine & other).sum() / min(area, max(int(other.sum()), 1)) > 0.2:
+        uv = cam.project(pl.corners_world(), SUPERSAMPLE)
+        if uv.min() < 2 or (uv[:, 0] > w - 3).any() or (uv[:, 1] > h - 3).any():
             return False
     return True
+
+
+def _fits(
+    pl: Placement,
+    placed: Sequence[Placement],
+    left: Camera,
+    right: Camera,
+    rig: Rig,
+    distance_range: tuple[float, float],
+) -> bool:
+    dist = float(np.linalg.norm(left.to_camera(pl.centroid_world()[None])[0]))
+    if not distance_range[0] <= dist <= distance_range[1]:
+        return False
+    if not _in_view(pl, left, right, *rig.image_size):
+        return False
+    fp = pl.footprint_world()
+    return all(_sat_gap(fp, q.footprint_world()) >= CLEARANCE for q in placed)
+
+
+def _visible_estimate(
+    placed: Sequence[Placement], cam: Camera, size: tuple[int, int]
+) -> list[float]:
+    scale = 0.25
+    masks = [_raster(_silhouette(cam, p), size, scale) for p in placed]
+    depth = [float(cam.to_camera(p.centroid_world()[None])[0, 2]) for p in placed]
+    out = []
+    for i, m in enumerate(masks):
+        cover = np.zeros_like(m)
+        for j, mj in enumerate(masks):
+            if depth[j] < depth[i] and placed[i].on != placed[j].obj.label:
+                cover |= mj
+        total = max(int(m.sum()), 1)
+        out.append(float((m & ~cover).sum()) / total)
+    return out
+
+
+# --------------------------------------------------------------------------------------------
+# ground truth
+
+
+@dataclass(frozen=True)
+class TruthObject:
+    """One object of ``truth.json`` (see ``docs/scenes.md``)."""
+
+    label: str
+    centroid: tuple[float, float, float]
+    footprint: tuple[tuple[float, float], ...]
+    distance: float
+    visible_fraction: float
+    index: int = 0
+    shape: str = ""
+    size: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    on: str | None = None
+
+
+@dataclass(frozen=True)
+class TruthRelation:
+    """One ordered pair of ``truth.json``."""
+
+    argument: str
+    referent: str
+    primary: str
+    ambiguous: bool
+    angle_deg: float = float("nan")
+    reasons: tuple[str, ...] = ()
+
+
+@dataclass(frozen=True)
+class SceneTruth:
+    """The ground truth of one scene, mirroring ``truth.json``."""
+
+    scene_dir: Path
+    objects: tuple[TruthObject, ...]
+    relations: tuple[TruthRelation, ...]
+    rig: dict[str, Any] = field(default_factory=dict)
+    legend: dict[int, str] = field(default_factory=dict)
+
+    @property
+    def left(self) -> Path:
+        return self.scene_dir / "left.png"
+
+    @property
+    def right(self) -> Path:
+        return self.scene_dir / "right.png"
+
+    @property
+    def calib(self) -> Path:
+        return self.scene_dir / "calib.json"
+
+    def object(self, label: str) -> TruthObject:
+        """The object called ``label``."""
+        for o in self.objects:
+            if o.label == label:
+                return o
+        raise KeyError(label)
+
+
+def _truth_dict(placed: Sequence[Placement], rig: Rig, seg: NDArray[np.int32]) -> dict[str, Any]:
+    left = rig.camera("left")
+    basis = ground_basis(rig.up)
+    s = SUPERSAMPLE
+    objects = []
+    sil = [_silhouette(left, p) for p in placed]
+    for k, pl in enumerate(placed):
+        c = left.to_camera(pl.centroid_world()[None])[0]
+        fp = left.to_camera(np.c_[pl.footprint_world(), np.full(len(pl.footprint_world()), 0)])
+        fp2 = fp @ basis.T
+        pixels = int((seg == k).sum())
+        vis = min(1.0, pixels / max(_poly_area(sil[k]) * s * s, 1e-9))
+        objects.append(
+            {
+                "label": pl.obj.label,
+                "index": k + 1,
+                "shape": pl.obj.shape,
+                "size": list(pl.obj.size),
+                "texture": pl.obj.texture,
+                "centroid": [float(v) for v in c],
+                "footprint": [[float(a), float(b)] for a, b in fp2],
+                "distance": float(np.linalg.norm(c)),
+                "visible_fraction": round(vis, 4),
+                "pixels": pixels // (s * s),
+                "on": pl.on,
+            }
+        )
+    relations = []
+    for i, a in enumerate(placed):
+        for j, b in enumerate(placed):
+            if i == j:
+                continue
+            fa = np.array(objects[i]["footprint"])
+            fb = np.array(objects[j]["footprint"])
+            primary, angle, _ = footprint_relation(fa, fb)
+            reasons = []
+            off = abs(((angle - 45.0) % 90.0) - 45.0)
+            if off > 45.0 - DIAGONAL_TOLERANCE_DEG:
+                reasons.append("diagonal")
+            if _sat_gap(fa, fb) <= 0:
+                reasons.append("overlap")
+            # one hides the other: the farther one's silhouette covered by the nearer one
+            far, near = (i, j) if objects[i]["distance"] > objects[j]["distance"] else (j, i)
+            mf = _raster(sil[far], rig.image_size, 1.0)
+            mn = _raster(sil[near], rig.image_size, 1.0)
+            hidden = float((mf & mn).sum()) / max(int(mf.sum()), 1)
+            if hidden >= HIDDEN_THRESHOLD and placed[far].on is None:
+                reasons.append("hidden")
+            relations.append(
+                {
+                    "argument": a.obj.label,
+                    "referent": b.obj.label,
+                    "primary": primary,
+                    "ambiguous": bool(reasons),
+                    "angle_deg": round(angle, 3),
+                    "reasons": reasons,
+                }
+            )
+    return {
+        "objects": objects,
+        "relations": relations,
+        "rig": {
+            "pitch_deg": rig.pitch_deg,
+            "baseline": rig.baseline,
+            "hfov_deg": rig.hfov_deg,
+            "image_size": list(rig.image_size),
+            "height": rig.height,
+            "up": [float(v) for v in rig.up],
+        },
+        "labels": {
+            "file": "left_labels.png",
+            "legend": {str(k + 1): p.obj.label for k, p in enumerate(placed)},
+        },
+    }
 
 
 # --------------------------------------------------------------------------------------------
 # writing
 
 
-def _calib_dict(
-    pitch_deg: float, baseline: float, hfov_deg: float, size: tuple[int, int], left: _render.Camera
-) -> tuple[dict[str, Any], list[float]]:
-    a = math.radians(pitch_deg)
-    up = [0.0, -math.cos(a) + 0.0, -math.sin(a) + 0.0]
-    up = [round(u, 15) + 0.0 for u in up]
-    if abs(pitch_deg) < 1e-9:
-        return {
-            "baseline": baseline,
-            "hfov_deg": hfov_deg,
-            "image_size": list(size),
-            "up": up,
-        }, up
-    K = left.K.tolist()
-    return {
-        "image_size": list(size),
-        "K_left": K,
-        "K_right": K,
-        "dist_left": [0.0] * 5,
-        "dist_right": [0.0] * 5,
-        "R": np.eye(3).tolist(),
-        "T": [-baseline, 0.0, 0.0],
-        "up": up,
-    }, up
+def _write_rgb(path: Path, rgb: NDArray[np.uint8]) -> None:
+    if not cv2.imwrite(str(path), np.ascontiguousarray(rgb[:, :, ::-1])):
+        raise InputError(path, "cannot be written")
 
 
-def _write_json(path: Path, data: Any) -> None:
-    tmp = path.with_name(path.name + ".tmp")
-    tmp.write_text(json.dumps(data, indent=1) + "\n", encoding="utf-8")
-    os.replace(tmp, path)
-
-
-def _write_assets(
-    tmp: Path, objects: Iterable[CatalogueObject]
-) -> dict[str, tuple[Path, Path]]:
-    """Mesh and texture files of each object in ``tmp``: label -> (mesh, texture)."""
-    out: dict[str, tuple[Path, Path]] = {}
-    textures: dict[str, Path] = {}
-    for o in objects:
-        mesh = tmp / f"{o.label}.obj"
-        text = _render.cylinder_obj(o.size) if o.shape == "cylinder" else _render.box_obj(o.size)
-        mesh.write_text(text, encoding="utf-8")
-        if o.texture not in textures:
-            try:
-                img = _render.texture_image(o.texture)
-            except Exception as e:  # missing or undownloadable scikit-image data
-                raise InputError(
-                    f"texture {o.texture!r}",
-                    f"skimage.data.{o.texture}() could not be loaded ({e}); pick another texture",
-                ) from None
-            textures[o.texture] = tmp / f"tex_{o.texture}.png"
-            _render.write_png(textures[o.texture], img)
-        out[o.label] = (mesh, textures[o.texture])
-    return out
-
-
-def _catalogue(objects: Sequence[CatalogueObject] | None) -> tuple[CatalogueObject, ...]:
-    cat = tuple(CATALOGUE if objects is None else objects)
-    labels = [o.label for o in cat]
-    if not cat or len(set(labels)) != len(labels):
-        raise InputError("objects", f"need a non-empty catalogue of unique labels, got {labels}")
-    for o in cat:
-        if o.shape not in ("box", "cylinder", "card"):
-            raise InputError(o.label, f"shape must be box, cylinder or card, got {o.shape!r}")
-        if len(o.size) != 3 or not all(math.isfinite(s) and s > 0 for s in o.size):
-            raise InputError(o.label, f"size must be three positive metres, got {o.size}")
-    return cat
-
-
-def _check_rig_args(image_size: Sequence[int], hfov_deg: float, baseline: float) -> tuple[int, int]:
-    try:
-        w, h = (int(v) for v in image_size)
-    except (TypeError, ValueError):
-        raise InputError("image_size", f"must be (width, height), got {image_size!r}") from None
-    if w < 16 or h < 16:
-        raise InputError("image_size", f"must be at least 16x16 pixels, got {w}x{h}")
-    if not 1.0 < float(hfov_deg) < 170.0:
-        raise InputError("hfov_deg", f"must be between 1 and 170 degrees, got {hfov_deg}")
-    if not 0.0 < float(baseline) < 2.0:
-        raise InputError("baseline", f"must be between 0 and 2 metres, got {baseline}")
-    return w, h
+def _dump(path: Path, obj: Any) -> None:
+    path.write_text(json.dumps(obj, indent=1) + "\n", encoding="utf-8")
 
 
 def generate_scene(
     scene_dir: str | PathLike[str],
     *,
-    seed: int = 0,
-    index: int = 0,
-    objects: Sequence[CatalogueObject] | None = None,
-    layout: Sequence[Placement] | None = None,
-    n_objects: int | tuple[int, int] = (3, 5),
-    pitch_deg: float = 0.0,
-    stack: bool = False,
+    seed: int | Sequence[int] = 0,
+    pitched: bool = False,
     image_size: tuple[int, int] = (640, 480),
     hfov_deg: float = 60.0,
     baseline: float = 0.12,
-    camera_height: float | None = None,
+    pitch_deg: float = 25.0,
+    n_objects: int | None = None,
+    stacked: bool = False,
+    catalogue: Sequence[CatalogueObject] = CATALOGUE,
+    layout: Sequence[Placement] | None = None,
 ) -> Path:
-    """Render one scene into ``scene_dir`` (written atomically; replaced if it exists).
+    """Render one scene into ``scene_dir`` (left/right images, calib, truth, labels).
 
-    A pure, picklable function: the scene depends only on its arguments, so scenes can be made
-    in a process pool. Layouts are random from ``numpy.random.default_rng([seed, index])``
-    unless ``layout`` gives the placements.
-
-    Parameters
-    ----------
-    scene_dir : path
-        The scene folder to create (its parent must exist).
-    seed, index : int
-        Seed of the dataset and number of the scene in it.
-    objects : sequence of CatalogueObject, optional
-        The catalogue to draw objects from (default :data:`CATALOGUE`); with ``layout``, the
-        objects named there.
-    layout : sequence of Placement, optional
-        Fixed placements instead of a random layout (for hand-made scenes and tests).
-    n_objects : int or (int, int)
-        How many objects a random layout has (inclusive range).
-    pitch_deg : float
-        Downward pitch of the rig in degrees (0 = level; the calibration is then the short form).
-    stack : bool
-        Put one object (a cylinder if any) on top of another, like the paper's mug on the can.
-    image_size, hfov_deg, baseline : see :func:`generate_dataset`.
-    camera_height : float, optional
-        Height of the left camera above the floor; default 0.20 m level, 0.50 m pitched.
+    A pure function of its arguments (safe in a process pool). The scene is written to a
+    temporary sibling folder and renamed into place, so an interrupted call leaves nothing
+    half-written. An existing ``scene_dir`` is replaced. ``layout`` overrides the random one.
 
     Returns
     -------
     Path
         ``scene_dir``.
     """
-    size = _check_rig_args(image_size, hfov_deg, baseline)
-    cat = _catalogue(objects)
-    by_label = {o.label: o for o in cat}
-    cam_h, cams = _rig(float(pitch_deg), camera_height, float(baseline), size, float(hfov_deg))
-    left = cams[0]
-    rng = np.random.default_rng([int(seed), int(index)])
-    if layout is None:
-        lo, hi = (n_objects, n_objects) if isinstance(n_objects, int) else n_objects
-        k = int(rng.integers(lo, hi + 1))
-        if not 1 <= k <= len(cat):
-            raise InputError("n_objects", f"must be between 1 and {len(cat)}, got {k}")
-        chosen = [cat[i] for i in sorted(rng.choice(len(cat), size=k, replace=False))]
-        placements = _sample_layout(rng, chosen, cams, stack=stack)
-    else:
-        placements = list(layout)
-        for pl in placements:
-            if pl.label not in by_label:
-                raise InputError("layout", f"{pl.label!r} is not in the catalogue {list(by_label)}")
-    objs = [by_label[p.label] for p in placements]
-
-    out = Path(scene_dir)
-    tmp_scene = Path(tempfile.mkdtemp(prefix=f".{out.name}.", suffix=".tmp", dir=out.parent))
+    scene_dir = Path(scene_dir)
+    rig = make_rig(
+        pitched, image_size=image_size, hfov_deg=hfov_deg, baseline=baseline, pitch_deg=pitch_deg
+    )
+    placed = (
+        tuple(layout)
+        if layout is not None
+        else sample_layout(seed, rig, catalogue=catalogue, n_objects=n_objects, stacked=stacked)
+    )
+    (img_l, seg_l), (img_r, _) = render(
+        [p.mesh() for p in placed], [rig.camera("left"), rig.camera("right")], SUPERSAMPLE
+    )
+    truth = _truth_dict(placed, rig, seg_l)
+    scene_dir.parent.mkdir(parents=True, exist_ok=True)
+    tmp = Path(tempfile.mkdtemp(prefix=f".{scene_dir.name}-", dir=scene_dir.parent))
     try:
-        with tempfile.TemporaryDirectory(prefix="scenespeak-render-") as assets_dir:
-            assets = _write_assets(Path(assets_dir), objs)
-            bodies = [
-                _render.Body(
-                    assets[o.label][0],
-                    assets[o.label][1],
-                    (p.x, p.y, p.base + o.size[2] / 2),
-                    math.radians(p.yaw_deg),
-                )
-                for o, p in zip(objs, placements, strict=True)
-            ]
-            (rgb_l, seg_l), (rgb_r, _) = _render.render(bodies, cams)
-        ss = _render.SUPERSAMPLE
-        labels = _render.downsample_labels(seg_l, ss, len(objs)).astype(np.uint8)
-        _render.write_png(tmp_scene / "left.png", rgb_l)
-        _render.write_png(tmp_scene / "right.png", rgb_r)
-        _render.write_png(tmp_scene / "left_labels.png", labels)
-        calib, up = _calib_dict(float(pitch_deg), float(baseline), float(hfov_deg), size, left)
-        _write_json(tmp_scene / "calib.json", calib)
-        E = ground_basis(up)
-        truth_objs = []
-        footprints: dict[str, NDArray[np.float64]] = {}
-        visible: dict[str, float] = {}
-        for i, (o, p) in enumerate(zip(objs, placements, strict=True), start=1):
-            centre = np.array([p.x, p.y, p.base + o.size[2] / 2])
-            c_cam = left.to_camera(centre[None])[0]
-            fp_w = (_rotz(p.yaw_deg)[:2, :2] @ _outline(o).T).T + [p.x, p.y]
-            fp_cam = left.to_camera(np.column_stack([fp_w, np.full(len(fp_w), p.base)]))
-            fp = fp_cam @ E.T
-            V = _world_vertices(o, p).T
-            px = left.project(V)
-            full = _hull_mask(px, size, ss)
-            seen = int((seg_l == i).sum())
-            vf = min(1.0, seen / max(int(full.sum()), 1))
-            x0, y0 = np.floor(px.min(axis=0)).astype(int)
-            x1, y1 = np.ceil(px.max(axis=0)).astype(int)
-            footprints[o.label] = fp
-            visible[o.label] = vf
-            truth_objs.append(
-                {
-                    "label": o.label,
-                    "index": i,
-                    "shape": o.shape,
-                    "size": list(o.size),
-                    "centroid": [round(float(v), 6) for v in c_cam],
-                    "footprint": [[round(float(a), 6), round(float(b), 6)] for a, b in fp],
-                    "distance": round(float(np.linalg.norm(c_cam)), 6),
-                    "visible_fraction": round(vf, 4),
-                    "yaw_deg": round(p.yaw_deg, 4),
-                    "base": round(p.base, 6),
-                    "bbox_left": [int(x0), int(y0), int(x1), int(y1)],
-                }
-            )
-        rels = ground_truth_relations(footprints, visible)
-        truth = {
-            "format": DATASET_FORMAT,
-            "seed": int(seed),
-            "index": int(index),
-            "objects": truth_objs,
-            "relations": [
-                {
-                    "argument": r.argument,
-                    "referent": r.referent,
-                    "primary": r.primary,
-                    "ambiguous": r.ambiguous,
-                    "angle_deg": r.angle_deg,
-                    "reason": r.reason,
-                }
-                for r in rels
-            ],
-            "rig": {
-                "pitch_deg": float(pitch_deg),
-                "baseline": float(baseline),
-                "hfov_deg": float(hfov_deg),
-                "image_size": list(size),
-                "camera_height": float(cam_h),
-            },
-            "up": up,
-            "labels_image": "left_labels.png",
-            "labels_legend": {str(i): o.label for i, o in enumerate(objs, start=1)},
-        }
-        _write_json(tmp_scene / "truth.json", truth)
-        _replace_dir(tmp_scene, out)
+        _write_rgb(tmp / "left.png", img_l)
+        _write_rgb(tmp / "right.png", img_r)
+        cv2.imwrite(
+            str(tmp / "left_labels.png"), downsample_labels(seg_l, SUPERSAMPLE, len(placed))
+        )
+        _dump(tmp / "calib.json", rig.calibration())
+        _dump(tmp / "truth.json", truth)
+        if scene_dir.exists():
+            shutil.rmtree(scene_dir)
+        os.replace(tmp, scene_dir)
     except BaseException:
-        shutil.rmtree(tmp_scene, ignore_errors=True)
+        shutil.rmtree(tmp, ignore_errors=True)
         raise
-    return out
+    return scene_dir
 
 
-def _replace_dir(src: Path, dst: Path) -> None:
-    """Move the finished folder ``src`` to ``dst``, replacing an older ``dst`` if any."""
-    if dst.exists():
-        old = dst.with_name(f".{dst.name}.old")
-        shutil.rmtree(old, ignore_errors=True)
-        os.replace(dst, old)
-        os.replace(src, dst)
-        shutil.rmtree(old, ignore_errors=True)
-    else:
-        os.replace(src, dst)
-
-
-def generate_object_views(
-    out_dir: str | PathLike[str],
+def render_training_views(
     obj: CatalogueObject,
+    out_dir: str | PathLike[str],
     *,
-    azimuths_deg: Sequence[float] = (0.0, 30.0, -30.0),
-    distance: float = 0.5,
     image_size: tuple[int, int] = (640, 480),
     hfov_deg: float = 60.0,
-) -> tuple[Path, ...]:
-    """Training views of one object alone on the floor, with masks (white = object).
-
-    Views are ``view_00.png``, ``view_00_mask.png``, ... in ``out_dir`` (created), taken from
-    ``distance`` metres at each azimuth (0 = in front), slightly from above.
-    """
-    size = _check_rig_args(image_size, hfov_deg, 0.1)
+    yaws: Sequence[float] = VIEW_YAWS,
+    distance: float = 0.5,
+) -> list[Path]:
+    """Render ``obj`` alone from a few viewpoints (front, ±30°, back by default) about
+    ``distance`` metres away, writing ``view_XX.png`` and ``view_XX_mask.png``."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    h = obj.size[2]
-    target = np.array([0.0, 0.0, h / 2])
-    cams = []
-    for az in azimuths_deg:
-        a = math.radians(az)
-        eye = [distance * math.sin(a), -distance * math.cos(a), h / 2 + 0.12]
-        cams.append(_render.look_at_camera(eye, target, size, hfov_deg))
-    files = []
-    with tempfile.TemporaryDirectory(prefix="scenespeak-render-") as tmp:
-        mesh, tex = _write_assets(Path(tmp), [obj])[obj.label]
-        images = _render.render([_render.Body(mesh, tex, (0.0, 0.0, h / 2), 0.0)], cams)
-    for k, (rgb, seg) in enumerate(images):
-        mask = _render.downsample_labels(seg, _render.SUPERSAMPLE, 1).astype(np.uint8) * 255
-        f = out / f"view_{k:02d}.png"
-        _render.write_png(f, rgb)
-        _render.write_png(out / f"view_{k:02d}_mask.png", mask)
-        files.append(f)
-    return tuple(files)
+    cam_h = obj.size[2] / 2 + 0.15
+    a = np.arctan2(0.15, distance)
+    rig = Rig(float(np.degrees(a)), cam_h, 0.0, hfov_deg, tuple(image_size))
+    cam = rig.camera()
+    written = []
+    for k, yaw in enumerate(yaws):
+        pl = Placement(obj, (0.0, distance * np.cos(a), 0.0), float(yaw))
+        ((img, seg),) = render([pl.mesh()], [cam], SUPERSAMPLE)
+        mask = downsample_labels(seg, SUPERSAMPLE, 1) * 255
+        _write_rgb(out / f"view_{k:02d}.png", img)
+        cv2.imwrite(str(out / f"view_{k:02d}_mask.png"), mask)
+        written.append(out / f"view_{k:02d}.png")
+    return written
 
 
-def _is_dataset(path: Path) -> bool:
-    try:
-        d = json.loads((path / "dataset.json").read_text(encoding="utf-8"))
-    except (OSError, ValueError):
-        return False
-    return isinstance(d, dict) and str(d.get("format", "")).startswith("scenespeak-scenes/")
+# --------------------------------------------------------------------------------------------
+# datasets
+
+
+@dataclass(frozen=True)
+class Dataset:
+    """A generated (or hand-labelled) dataset folder."""
+
+    root: Path
+    seed: int
+    objects: tuple[CatalogueObject, ...]
+    scenes: tuple[Path, ...]
+    meta: dict[str, Any] = field(default_factory=dict)
+
+    def views(self, label: str) -> list[Path]:
+        """Training views of ``label`` (masks excluded), sorted."""
+        return sorted(
+            p for p in (self.root / "objects" / label).glob("view_*.png") if "_mask" not in p.name
+        )
+
+
+def _scene_seed(seed: int, index: int) -> list[int]:
+    return [int(seed), int(index)]
 
 
 def generate_dataset(
@@ -813,220 +662,201 @@ def generate_dataset(
     *,
     seed: int = 0,
     pitched: bool | Literal["mixed"] = False,
-    pitch_deg: float = DEFAULT_PITCH_DEG,
     image_size: tuple[int, int] = (640, 480),
     hfov_deg: float = 60.0,
     baseline: float = 0.12,
-    objects: Sequence[CatalogueObject] | None = None,
-    n_objects: int | tuple[int, int] = (3, 5),
-    stack: bool | Literal["some"] = False,
+    stacked: bool = False,
     views: bool = True,
-    progress: Callable[[int, int], None] | None = None,
+    overwrite: bool = False,
+    progress: Callable[[int, int], Any] | None = None,
 ) -> Path:
-    """Render a dataset: training views of every object and ``n_scenes`` stereo scenes.
+    """Generate a dataset of ``n_scenes`` rendered stereo scenes with ground truth.
 
     Parameters
     ----------
     out_dir : path
-        The dataset folder: created, or an existing scenespeak dataset (its scenes are
-        regenerated), or an empty folder. Anything else is refused.
+        Folder to create (or an empty one). A folder holding a dataset made with the same
+        settings is completed (finished scenes are kept: an interrupted run resumes).
     n_scenes : int
-        Number of scenes ``scene_000``, ``scene_001``, ...
-    seed : int
-        Seed of the layouts; the same seed gives identical files.
+        Number of scenes; scene ``i`` uses the seed ``[seed, i]``, independent of the others.
     pitched : bool or "mixed"
-        Level rig, rig pitched down by ``pitch_deg``, or alternating (odd scenes pitched).
-    image_size : (int, int)
-        Width and height of the images in pixels.
-    hfov_deg : float
-        Horizontal field of view in degrees.
-    baseline : float
-        Distance between the cameras in metres.
-    objects : sequence of CatalogueObject, optional
-        The catalogue (default :data:`CATALOGUE`).
-    n_objects : int or (int, int)
-        Objects per scene (inclusive range).
-    stack : bool or "some"
-        Put one object on another in every scene, or in every fourth scene ("some").
+        Level rig, rig pitched 25° down, or both alternately (odd scenes pitched).
+    stacked : bool
+        Put one object on another in every scene where one fits (the paper's mug on a can).
     views : bool
-        Also render the training views ``objects/<label>/view_XX.png``.
+        Render the training views into ``objects/<label>/``.
+    overwrite : bool
+        Replace a dataset made with other settings instead of refusing.
     progress : callable(done, total), optional
-        Called after each scene.
-
-    Returns
-    -------
-    Path
-        ``out_dir``.
+        Called after each object's views and each scene.
 
     Raises
     ------
     InputError
-        ``out_dir`` is a non-empty folder that is not a scenespeak dataset, or a bad argument.
+        If ``out_dir`` is a file, or a non-empty folder that is not a scenespeak dataset, or a
+        dataset made with other settings (without ``overwrite``).
     """
     out = Path(out_dir)
-    if out.exists() and not out.is_dir():
-        raise InputError(out, "exists and is not a folder; choose another output folder")
-    if out.is_dir() and any(out.iterdir()) and not _is_dataset(out):
-        raise InputError(
-            out,
-            "is not empty and is not a scenespeak dataset (no dataset.json); refusing to write "
-            "into it: choose a new or empty folder",
-        )
     if n_scenes < 0:
-        raise InputError("n_scenes", f"must be 0 or more, got {n_scenes}")
+        raise InputError("n_scenes", f"must be >= 0, got {n_scenes}")
     if pitched not in (True, False, "mixed"):
         raise InputError("pitched", f"must be True, False or 'mixed', got {pitched!r}")
-    size = _check_rig_args(image_size, hfov_deg, baseline)
-    cat = _catalogue(objects)
-    out.mkdir(parents=True, exist_ok=True)
-    names = [f"scene_{i:03d}" for i in range(n_scenes)]
-    meta: dict[str, Any] = {
-        "format": DATASET_FORMAT,
-        "seed": int(seed),
-        "objects": [o.to_dict() for o in cat],
-        "scenes": [],
-        "complete": False,
-        "generator": {
-            "pitched": pitched,
-            "pitch_deg": float(pitch_deg),
-            "image_size": list(size),
-            "hfov_deg": float(hfov_deg),
-            "baseline": float(baseline),
-            "n_objects": n_objects if isinstance(n_objects, int) else list(n_objects),
-            "stack": stack,
-        },
+    settings = {
+        "n_scenes": int(n_scenes),
+        "pitched": pitched,
+        "image_size": [int(v) for v in image_size],
+        "hfov_deg": float(hfov_deg),
+        "baseline": float(baseline),
+        "stacked": bool(stacked),
+        "views": bool(views),
     }
-    _write_json(out / "dataset.json", meta)
+    names = [f"scene_{i:03d}" for i in range(n_scenes)]
+    meta = {
+        "format": FORMAT,
+        "seed": int(seed),
+        "objects": [
+            {"label": o.label, "shape": o.shape, "size": list(o.size), "texture": o.texture}
+            for o in CATALOGUE
+        ],
+        "scenes": names,
+        "generator": settings,
+        "complete": False,
+    }
+    if out.exists() and not out.is_dir():
+        raise InputError(out, "is a file; give a folder for the dataset")
+    if out.is_dir() and any(out.iterdir()):
+        old = _read_meta(out)
+        if old is None:
+            raise InputError(
+                out, "is not empty and not a scenespeak dataset; choose an empty or new folder"
+            )
+        if old.get("generator") != settings or old.get("seed") != seed:
+            if not overwrite:
+                raise InputError(
+                    out,
+                    "holds a dataset made with other settings; choose another folder "
+                    "or pass overwrite=True",
+                )
+            for p in out.iterdir():
+                if p.is_dir() and (p.name.startswith("scene_") or p.name == "objects"):
+                    shutil.rmtree(p)
+    out.mkdir(parents=True, exist_ok=True)
+    _dump(out / "dataset.json", meta)
+    total = (len(CATALOGUE) if views else 0) + n_scenes
+    done = 0
     if views:
-        for o in cat:
-            tmp = Path(tempfile.mkdtemp(prefix=f".{o.label}.", suffix=".tmp", dir=out))
-            try:
-                generate_object_views(tmp, o, image_size=size, hfov_deg=hfov_deg)
-                (out / "objects").mkdir(exist_ok=True)
-                _replace_dir(tmp, out / "objects" / o.label)
-            except BaseException:
-                shutil.rmtree(tmp, ignore_errors=True)
-                raise
+        for obj in CATALOGUE:
+            d = out / "objects" / obj.label
+            if not (d / f"view_{len(VIEW_YAWS) - 1:02d}_mask.png").exists():
+                render_training_views(obj, d, image_size=image_size, hfov_deg=hfov_deg)
+            done += 1
+            if progress is not None:
+                progress(done, total)
     for i, name in enumerate(names):
-        is_pitched = pitched is True or (pitched == "mixed" and i % 2 == 1)
-        generate_scene(
-            out / name,
-            seed=seed,
-            index=i,
-            objects=cat,
-            n_objects=n_objects,
-            pitch_deg=pitch_deg if is_pitched else 0.0,
-            stack=stack is True or (stack == "some" and i % 4 == 3),
-            image_size=size,
-            hfov_deg=hfov_deg,
-            baseline=baseline,
-        )
+        if not (out / name / "truth.json").exists():
+            p = pitched if pitched != "mixed" else bool(i % 2)
+            generate_scene(
+                out / name,
+                seed=_scene_seed(seed, i),
+                pitched=bool(p),
+                image_size=image_size,
+                hfov_deg=hfov_deg,
+                baseline=baseline,
+                stacked=stacked,
+            )
+        done += 1
         if progress is not None:
-            progress(i + 1, n_scenes)
-    # scenes of an earlier, longer run are left alone but not listed
-    meta["scenes"] = names
+            progress(done, total)
     meta["complete"] = True
-    _write_json(out / "dataset.json", meta)
+    _dump(out / "dataset.json", meta)
     return out
 
 
-# --------------------------------------------------------------------------------------------
-# loading
-
-
-def _read_json(path: Path) -> Any:
+def _read_meta(root: Path) -> dict[str, Any] | None:
     try:
-        return json.loads(path.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        raise InputError(path, "does not exist; is this a scenespeak scene/dataset folder?") from None
-    except (OSError, UnicodeDecodeError, ValueError) as e:
-        raise InputError(path, f"cannot be read as JSON ({e})") from None
-
-
-def load_truth(scene_dir: str | PathLike[str]) -> SceneTruth:
-    """Read a scene's ``truth.json`` (also accepts the path of the file itself).
-
-    Raises
-    ------
-    InputError
-        The file is missing, not JSON, or lacks a required field.
-    """
-    p = Path(scene_dir)
-    if p.is_file():
-        p = p.parent
-    f = p / "truth.json"
-    d = _read_json(f)
-    try:
-        objs = tuple(
-            ObjectTruth(
-                label=str(o["label"]),
-                index=int(o.get("index", i + 1)),
-                centroid=tuple(float(v) for v in o["centroid"]),  # type: ignore[arg-type]
-                footprint=tuple((float(a), float(b)) for a, b in o["footprint"]),
-                distance=float(o["distance"]),
-                visible_fraction=float(o["visible_fraction"]),
-                shape=str(o.get("shape", "")),
-                size=tuple(float(v) for v in o.get("size", (0, 0, 0))),  # type: ignore[arg-type]
-                yaw_deg=float(o.get("yaw_deg", 0.0)),
-                base=float(o.get("base", 0.0)),
-                bbox_left=tuple(int(v) for v in o.get("bbox_left", (0, 0, 0, 0))),  # type: ignore[arg-type]
-            )
-            for i, o in enumerate(d["objects"])
-        )
-        rels = tuple(
-            RelationTruth(
-                str(r["argument"]),
-                str(r["referent"]),
-                r["primary"],
-                bool(r["ambiguous"]),
-                float(r.get("angle_deg", float("nan"))),
-                str(r.get("reason", "")),
-            )
-            for r in d["relations"]
-        )
-        rg = d["rig"]
-        rig = RigTruth(
-            float(rg["pitch_deg"]),
-            float(rg["baseline"]),
-            float(rg["hfov_deg"]),
-            (int(rg["image_size"][0]), int(rg["image_size"][1])),
-            float(rg.get("camera_height", 0.0)),
-        )
-        up = d.get("up")
-        if up is None:
-            a = math.radians(rig.pitch_deg)
-            up = [0.0, -math.cos(a), -math.sin(a)]
-        up_t = (float(up[0]), float(up[1]), float(up[2]))
-    except (KeyError, TypeError, ValueError, IndexError) as e:
-        raise InputError(f, f"is not a scenespeak truth file (bad or missing field: {e})") from None
-    return SceneTruth(p, objs, rels, rig, up_t)
+        meta = json.loads((root / "dataset.json").read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None
+    if not isinstance(meta, dict) or meta.get("format") != FORMAT:
+        return None
+    return meta
 
 
 def load_dataset(dataset_dir: str | PathLike[str]) -> Dataset:
-    """Read ``dataset.json``: the catalogue and the scene folders (those that exist).
+    """Open a dataset folder: its catalogue and the scenes that exist (with a truth.json).
 
     Raises
     ------
     InputError
-        No ``dataset.json`` or not a scenespeak dataset.
+        If ``dataset_dir/dataset.json`` is missing or not of format ``scenespeak-scenes/1``.
     """
-    p = Path(dataset_dir)
-    f = p / "dataset.json"
-    d = _read_json(f)
-    if not isinstance(d, dict) or not str(d.get("format", "")).startswith("scenespeak-scenes/"):
-        raise InputError(f, f"is not a scenespeak dataset (format should be {DATASET_FORMAT!r})")
+    root = Path(dataset_dir)
+    meta = _read_meta(root)
+    if meta is None:
+        raise InputError(
+            root / "dataset.json", f"missing or not a {FORMAT} dataset; see docs/scenes.md"
+        )
     try:
-        objs = tuple(
+        objects = tuple(
             CatalogueObject(
                 str(o["label"]),
-                o["shape"],
-                tuple(float(v) for v in o["size"]),  # type: ignore[arg-type]
-                str(o["texture"]),
+                str(o.get("shape", "")),
+                tuple(o.get("size", (0, 0, 0))),
+                str(o.get("texture", "")),
             )
-            for o in d["objects"]
+            for o in meta.get("objects", [])
         )
-        scenes = tuple(p / str(s) for s in d["scenes"] if (p / str(s) / "truth.json").is_file())
-        seed = int(d["seed"])
-    except (KeyError, TypeError, ValueError) as e:
-        raise InputError(f, f"is not a scenespeak dataset (bad or missing field: {e})") from None
-    return Dataset(p, seed, objs, scenes, bool(d.get("complete", True)))
+    except (KeyError, TypeError) as exc:
+        raise InputError(root / "dataset.json", f"an object lacks the field {exc}") from exc
+    scenes = tuple(
+        root / str(s) for s in meta.get("scenes", []) if (root / str(s) / "truth.json").exists()
+    )
+    return Dataset(root, int(meta.get("seed", 0)), objects, scenes, meta)
+
+
+def load_truth(scene_dir: str | PathLike[str]) -> SceneTruth:
+    """Read ``scene_dir/truth.json`` into a :class:`SceneTruth`.
+
+    Raises
+    ------
+    InputError
+        If the file is missing, not JSON, or lacks required fields.
+    """
+    d = Path(scene_dir)
+    path = d / "truth.json"
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError as exc:
+        raise InputError(path, "missing: every scene needs a truth.json") from exc
+    except (OSError, ValueError) as exc:
+        raise InputError(path, f"cannot be read as JSON ({exc})") from exc
+    try:
+        objects = tuple(
+            TruthObject(
+                label=str(o["label"]),
+                centroid=tuple(float(v) for v in o["centroid"]),
+                footprint=tuple((float(a), float(b)) for a, b in o.get("footprint", [])),
+                distance=float(o.get("distance", np.linalg.norm(o["centroid"]))),
+                visible_fraction=float(o.get("visible_fraction", 1.0)),
+                index=int(o.get("index", k + 1)),
+                shape=str(o.get("shape", "")),
+                size=tuple(float(v) for v in o.get("size", (0, 0, 0))),
+                on=o.get("on"),
+            )
+            for k, o in enumerate(data["objects"])
+        )
+        relations = tuple(
+            TruthRelation(
+                str(r["argument"]),
+                str(r["referent"]),
+                str(r["primary"]),
+                bool(r.get("ambiguous", False)),
+                float(r.get("angle_deg", float("nan"))),
+                tuple(r.get("reasons", ())),
+            )
+            for r in data.get("relations", [])
+        )
+        legend = {int(k): str(v) for k, v in data.get("labels", {}).get("legend", {}).items()}
+    except (KeyError, TypeError, ValueError) as exc:
+        raise InputError(path, f"an object or relation lacks or mangles the field {exc}") from exc
+    return SceneTruth(d, objects, relations, dict(data.get("rig", {})), legend)
