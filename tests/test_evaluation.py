@@ -15,6 +15,7 @@ from skimage import data, transform
 
 from scenespeak.errors import InputError
 from scenespeak.evaluation import (
+    EvaluationResult,
     PredictedScene,
     SceneTruth,
     TruthObject,
@@ -116,6 +117,9 @@ def test_hand_computed_two_scenes() -> None:
     assert "| primary direction right, ambiguous pairs | 1 / 2 (50 %) | – |" in table
     assert "| centroid error, median / mean | 0.0 / 3.4 cm | – |" in table
     assert "- scene_c: left.png: no stereo match" in table
+    assert [s.missing for s in result.scenes] == [(), ("can",), ("hat", "mug", "can")]
+    assert "Objects found by label: can 1/3, hat 2/3, mug 2/3." in table
+    assert format_table(EvaluationResult.from_dict(json.loads(json.dumps(d)))) == table
 
 
 def test_an_empty_result_prints_dashes() -> None:

@@ -315,10 +315,10 @@ def _generate(out: Path, n: int, *, seed: int, pitched: bool, quiet: bool) -> An
     if progress is None:
         return generate_dataset(out, n, seed=seed, pitched=pitched, progress=None)
     with progress:
-        task = progress.add_task("rendering scenes", total=n)
+        task = progress.add_task("rendering", total=None)
 
-        def advance(*_: Any, **__: Any) -> None:
-            progress.advance(task)
+        def advance(done: int, total: int) -> None:
+            progress.update(task, completed=done, total=total)
 
         return generate_dataset(out, n, seed=seed, pitched=pitched, progress=advance)
 

@@ -36,6 +36,7 @@ from __future__ import annotations
 
 import json
 import math
+import multiprocessing
 import tempfile
 import time
 from collections.abc import Callable, Mapping, Sequence
@@ -219,6 +220,8 @@ class SceneScore:
         Time the chain took on the scene.
     error : str or None
         Why the scene failed outright.
+    labels, missing : tuple of str
+        The true objects' labels, and those that were not described.
     """
 
     name: str
@@ -235,6 +238,8 @@ class SceneScore:
     centroid_errors: tuple[float, ...]
     seconds: float
     error: str | None = None
+    labels: tuple[str, ...] = ()
+    missing: tuple[str, ...] = ()
 
 
 def score_scene(pred: PredictedScene, truth: SceneTruth) -> SceneScore:
@@ -283,6 +288,8 @@ def score_scene(pred: PredictedScene, truth: SceneTruth) -> SceneScore:
         centroid_errors=errors,
         seconds=float(pred.seconds),
         error=pred.error,
+        labels=tuple(labels),
+        missing=tuple(lab for lab in labels if lab not in pred.objects),
     )
 
 
@@ -366,6 +373,39 @@ class EvaluationResult:
         """Per-scene times of the scenes that ran (failed ones included)."""
         return tuple(s.seconds for s in self.scenes)
 
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> EvaluationResult:
+        """Rebuild a result from :meth:`to_dict`'s output (e.g. a saved ``--json`` file).
+
+        Examples
+        --------
+        >>> r = summarize([], dataset="x", workers=2)
+        >>> EvaluationResult.from_dict(r.to_dict()) == r
+        True
+        """
+        try:
+            scenes = [
+                SceneScore(
+                    **{
+                        **s,
+                        "centroid_errors": tuple(s["centroid_errors"]),
+                        "labels": tuple(s.get("labels", ())),
+                        "missing": tuple(s.get("missing", ())),
+                    }
+                )
+                for s in data["per_scene"]
+            ]
+            return summarize(
+                scenes,
+                dataset=str(data.get("dataset", "")),
+                workers=int(data.get("workers", 1)),
+                wall_seconds=float(data.get("wall_seconds", 0.0)),
+            )
+        except (KeyError, TypeError) as exc:
+            raise InputError(
+                "evaluation JSON", f"not the output of `evaluate --json` ({exc})"
+            ) from exc
+
     def to_dict(self) -> dict[str, Any]:
         """A JSON-ready summary plus every scene's score (``scenespeak evaluate --json``)."""
         errs = np.asarray(self.centroid_errors, dtype=np.float64)
@@ -405,7 +445,13 @@ class EvaluationResult:
             "seconds_per_scene": {"median": stat(secs, np.median), "mean": stat(secs, np.mean)},
             "paper": dict(PAPER),
             "per_scene": [
-                {**asdict(s), "centroid_errors": list(s.centroid_errors)} for s in self.scenes
+                {
+                    **asdict(s),
+                    "centroid_errors": list(s.centroid_errors),
+                    "labels": list(s.labels),
+                    "missing": list(s.missing),
+                }
+                for s in self.scenes
             ],
             **dict(self.extra),
         }
@@ -463,6 +509,14 @@ def format_table(result: EvaluationResult) -> str:
     )
     lines = [head, "", "| measure | scenespeak | paper (Luke et al. 2005) |", "| --- | --- | --- |"]
     lines += [f"| {a} | {b} | {c} |" for a, b, c in rows]
+    found: dict[str, list[int]] = {}
+    for s in result.scenes:
+        for lab in s.labels:
+            found.setdefault(lab, [0, 0])[1] += 1
+            found[lab][0] += lab not in s.missing
+    if found:
+        by_label = ", ".join(f"{lab} {f}/{n}" for lab, (f, n) in sorted(found.items()))
+        lines += ["", f"Objects found by label: {by_label}."]
     failed = [s for s in result.scenes if s.error]
     if failed:
         lines += ["", "Failed scenes:"]
@@ -517,12 +571,19 @@ def find_scenes(dataset_dir: str | PathLike[str]) -> list[Path]:
 
 
 def _init_worker() -> None:
-    # Each process gets one core: OpenCV's own thread pool would only fight the other workers.
+    # Each worker gets one core: OpenCV's and BLAS's own thread pools would only fight the other
+    # workers (and spinning BLAS threads are slow on a shared machine).
     try:
         import cv2
 
         cv2.setNumThreads(1)
     except ImportError:  # pragma: no cover - cv2 is a dependency
+        pass
+    try:
+        from threadpoolctl import threadpool_limits  # comes with scikit-learn
+
+        threadpool_limits(1)
+    except ImportError:  # pragma: no cover
         pass
 
 
@@ -618,7 +679,12 @@ def _run(
                 progress(i, total)
         return scores
     n = min(workers, total)
-    with ProcessPoolExecutor(max_workers=max(n, 1), initializer=_init_worker) as pool:
+    # "spawn": fresh interpreters. Forking a parent whose OpenCV / BLAS thread pools are already
+    # running can deadlock the children.
+    context = multiprocessing.get_context("spawn")
+    with ProcessPoolExecutor(
+        max_workers=max(n, 1), mp_context=context, initializer=_init_worker
+    ) as pool:
         futures = [pool.submit(evaluate_scene, str(s), db_path) for s in scenes]
         for i, fut in enumerate(as_completed(futures), 1):
             scores.append(fut.result())
