@@ -314,6 +314,7 @@ def test_missing_training_image_leaves_the_database_as_it_was(
 # rendered scenes (need scenespeak.scenes and pybullet)
 
 
+@pytest.mark.slow
 def test_demo_prints_sentences(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     pytest.importorskip("scenespeak.scenes")
     code, out, err = _run(["demo", tmp_path / "demo", "--quiet"], capsys)

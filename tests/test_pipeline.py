@@ -215,10 +215,12 @@ def _describe_rendered(scene: Path, db: Path) -> SceneDescription:
 def test_rendered_relations_and_centroids(rendered: Path) -> None:
     """Every unambiguous relation right; every centroid within its tolerance.
 
-    Tolerance on the horizontal plane: 4 cm across (x), and along the depth axis 4 cm plus half
-    the object's depth on the near side — the points are on the visible surface, which is
-    nearer to the camera than the centre of the object's volume by up to half its depth (the
-    4 cm are stereo noise at 2 m: one pixel of disparity is 6 cm of depth there).
+    Tolerance on the horizontal plane: the points are on the visible surface, not in the
+    object's volume, so their centroid lies inside the footprint, on the camera's side: it may
+    be off the centre of the volume by up to half the footprint's larger side (a box turned
+    towards the camera shows one face more than the other, so this holds across as well as in
+    depth), plus 3 cm of stereo noise (one pixel of disparity is 6 cm of depth at 2 m), and it
+    may not be more than those 3 cm behind the centre.
     """
     db = rendered / "objects.db"
     sizes = {
@@ -242,9 +244,9 @@ def test_rendered_relations_and_centroids(rendered: Path) -> None:
                 continue
             described += 1
             dx, dy = obj.plane_centroid - _truth_xy(t, desc.up)
-            half_depth = 0.5 * max(sizes[t["label"]][:2])
-            assert abs(dx) <= 0.04, f"{scene.name} {t['label']}: x off by {dx:.3f} m"
-            assert -0.04 - half_depth <= dy <= 0.04, f"{scene.name} {t['label']}: depth {dy:.3f}"
+            tol = 0.5 * max(sizes[t["label"]][:2]) + 0.03
+            where = f"{scene.name} {t['label']}: off by ({dx:.3f}, {dy:.3f}) m"
+            assert np.hypot(dx, dy) <= tol and dy <= 0.03, where
         for r in truth["relations"]:
             rel = desc.relation(r["argument"], r["referent"])
             if r["ambiguous"] or rel is None:

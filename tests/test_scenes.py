@@ -235,3 +235,113 @@ def test_load_errors(tmp_path: Path) -> None:
         load_dataset(tmp_path)
     with pytest.raises(InputError, match=r"truth\.json"):
         load_truth(tmp_path)
+
+
+def _hull_centroid(uv: np.ndarray) -> np.ndarray:
+    """Area centroid of the convex hull of 2-D points."""
+    p = cv2.convexHull(uv.astype(np.float32))[:, 0, :].astype(np.float64)
+    x, y = p[:, 0], p[:, 1]
+    xn, yn = np.roll(x, -1), np.roll(y, -1)
+    c = x * yn - xn * y
+    return np.array([((x + xn) * c).sum(), ((y + yn) * c).sum()]) / (3.0 * c.sum())
+
+
+def test_both_cameras_project_through_the_written_calibration(tmp_path: Path) -> None:
+    """Turned boxes, pitched rig: their silhouettes' centroids in the left AND right renders
+    (pybullet's segmentation at 2x) match the hulls projected with K, R, T of calib.json."""
+    from scenespeak import _render
+
+    size = (320, 240)
+    rig = make_rig(True, image_size=size)
+    cube = CatalogueObject("cube", "box", (0.05, 0.05, 0.05), "astronaut")
+    layout = [
+        Placement(cube, (-0.25, 0.9, 0.0), 25.0),
+        Placement(cube, (0.2, 1.3, 0.0), -40.0),
+        Placement(cube, (0.0, 0.75, 0.0), 10.0),
+    ]
+    scene = generate_scene(tmp_path / "s", pitched=True, image_size=size, layout=layout)
+    calib = load_rig(scene / "calib.json")
+    left, right = rig.camera("left"), rig.camera("right")
+    renders = _render.render([p.mesh() for p in layout], [left, right], 2)
+    truth = load_truth(scene)
+    errors = []
+    for k, pl in enumerate(layout):
+        x_left = left.to_camera(pl.corners_world())
+        assert truth.objects[k].centroid == pytest.approx(
+            tuple(left.to_camera(pl.centroid_world()[None])[0]), abs=1e-9
+        )
+        for (K, xyz), (_, seg) in zip(
+            ((calib.K_left, x_left), (calib.K_right, x_left @ calib.R.T + calib.T)),
+            renders,
+            strict=True,
+        ):
+            uvw = xyz @ K.T
+            expected = _hull_centroid(uvw[:, :2] / uvw[:, 2:3])
+            rows, cols = np.nonzero(seg == k)
+            # render pixel j (2x) has its centre at final-image coordinate (j - 0.5) / 2
+            got = (np.array([cols.mean(), rows.mean()]) - 0.5) / 2
+            errors.append(np.abs(got - expected).max())
+    print("projection errors (px):", np.round(errors, 3))
+    # measured <= 0.1 px; a quarter-pixel error in cx or cy would fail
+    assert max(errors) < 0.2
+
+
+def test_pitched_truth_is_in_the_pipelines_plane_frame(tmp_path: Path) -> None:
+    """Footprints and heights agree with calibration.ground_basis / heights for the written up."""
+    from scenespeak.calibration import heights, to_ground
+
+    layout = [
+        Placement(CATALOGUE[0], (-0.3, 1.2, 0.0), 30.0),  # box, turned
+        Placement(CATALOGUE[5], (0.25, 0.9, 0.0), 0.0),  # tin
+    ]
+    scene = generate_scene(tmp_path / "s", pitched=True, image_size=SMALL, layout=layout)
+    truth = load_truth(scene)
+    up = load_rig(scene / "calib.json").up
+    assert up == pytest.approx(truth.rig["up"])
+    for o, pl in zip(truth.objects, layout, strict=True):
+        fp = np.array(o.footprint)
+        centre = to_ground(np.array([o.centroid]), up)[0]
+        assert fp.mean(axis=0) == pytest.approx(centre, abs=1e-6)
+        base = np.c_[pl.footprint_world(), np.zeros(len(fp))]
+        expected = to_ground(make_rig(True).camera().to_camera(base), up)
+        np.testing.assert_allclose(fp, expected, atol=1e-9)
+        # the floor is camera-height below the camera; the centroid half the object above it
+        h = heights(np.array([o.centroid]), up)[0]
+        assert h == pytest.approx(-truth.rig["height"] + o.size[2] / 2, abs=1e-9)
+        # and the footprint keeps the object's real area
+        x, y = fp[:, 0], fp[:, 1]
+        area = 0.5 * abs(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1)))
+        w, d, _ = o.size
+        assert area == pytest.approx(
+            w * d if o.shape != "cylinder" else np.pi * w * d / 4, rel=0.01
+        )
+
+
+def test_stacked_object_stands_on_the_other(tmp_path: Path) -> None:
+    scene = generate_scene(tmp_path / "s", seed=[1, 2], stacked=True, image_size=SMALL)
+    truth = load_truth(scene)
+    top = [o for o in truth.objects if o.on is not None]
+    assert len(top) == 1
+    top_obj = top[0]
+    base = truth.object(top_obj.on)
+    up = np.array(truth.rig["up"])
+    from scenespeak.calibration import heights
+
+    h_top, h_base = heights(np.array([top_obj.centroid, base.centroid]), up)
+    assert h_top - h_base == pytest.approx(base.size[2] / 2 + top_obj.size[2] / 2, abs=1e-9)
+    for a, b in ((top_obj.label, base.label), (base.label, top_obj.label)):
+        (r,) = [r for r in truth.relations if (r.argument, r.referent) == (a, b)]
+        assert r.ambiguous and "overlap" in r.reasons
+
+
+def test_scene_folders_are_readable_and_stale_temporaries_are_removed(tmp_path: Path) -> None:
+    out = tmp_path / "ds"
+    generate_dataset(out, 1, seed=4, image_size=(80, 60), views=False)
+    assert (out / "scene_000").stat().st_mode & 0o755 == 0o755
+    stale = out / ".scene_001-abc123"  # as an interrupted generate_scene leaves it
+    stale.mkdir()
+    (stale / "left.png").write_bytes(b"half")
+    generate_dataset(out, 2, seed=4, image_size=(80, 60), views=False, overwrite=True)
+    assert not stale.exists()
+    assert [p.name for p in load_dataset(out).scenes] == ["scene_000", "scene_001"]
+    assert not list(out.glob(".*"))

@@ -417,8 +417,19 @@ def plot_hulls(
             ax.add_patch(Polygon(poly, closed=True, fc=(*col[:3], 0.3), ec=col, lw=2.0))
         else:
             ax.plot(poly[:, 0], poly[:, 1], "-o", color=col, lw=2.0)
-        cx, cy = _polygon_centroid(poly)
-        ax.text(cx, cy, lab, ha="center", va="center", fontsize="medium", weight="bold")
+        cx, _ = _polygon_centroid(poly)
+        ax.annotate(
+            lab,
+            (cx, float(poly[:, 1].max())),
+            textcoords="offset points",
+            xytext=(0, 4),
+            ha="center",
+            va="bottom",
+            fontsize="medium",
+            weight="bold",
+            color=tuple(0.6 * c for c in col[:3]),
+            bbox={"boxstyle": "round,pad=0.15", "fc": "white", "ec": "none", "alpha": 0.75},
+        )
         everything.append(poly)
     allp = np.vstack(everything)
     lo, hi = allp.min(axis=0), allp.max(axis=0)
@@ -526,6 +537,7 @@ class _SceneView:
     right_xy: NDArray[np.float64] | None = None
     xyz: NDArray[np.float64] | None = None
     point_labels: list[Any] | None = None
+    match_labels: list[Any] | None = None
     up: NDArray[np.float64] = field(default_factory=lambda: np.array([0.0, -1.0, 0.0]))
     hfov_deg: float | None = None
     hulls: dict[str, NDArray[np.float64]] = field(default_factory=dict)
@@ -618,6 +630,15 @@ def _scene_view(description: Any) -> _SceneView:
     if v.xyz is None and v.object_xyz:
         v.xyz = np.vstack(list(v.object_xyz.values()))
         v.point_labels = [lab for lab, p in v.object_xyz.items() for _ in range(len(p))]
+    v.match_labels = v.point_labels
+    if v.xyz is not None and v.point_labels is not None:
+        # Objects built from other points than the labelled keypoints (dense disparity, unknown
+        # clusters) would be missing from the 3-D picture: add their own points.
+        have = set(v.point_labels)
+        extra = {lab: p for lab, p in v.object_xyz.items() if lab not in have and len(p)}
+        if extra:
+            v.xyz = np.vstack([v.xyz, *extra.values()])
+            v.point_labels = v.point_labels + [lab for lab, p in extra.items() for _ in p]
     return v
 
 
@@ -648,7 +669,7 @@ def _scene_figures(
         and view.left_xy is not None
         and view.right_xy is not None
     ):
-        lbl = view.point_labels if view.point_labels is not None else None
+        lbl = view.match_labels
         if lbl is not None and len(lbl) != len(view.left_xy):
             lbl = None
         out.append(

@@ -92,7 +92,7 @@ class PipelineOptions:
     min_inliers: int = 8
     dense: bool = True
     dense_min_points: int = 30
-    dense_max_points: int = 400
+    dense_max_points: int = 300
     unknown: bool = True
     unknown_max_distance: float = 2.5
     min_points: int = 3

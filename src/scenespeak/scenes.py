@@ -543,7 +543,10 @@ def _write_rgb(path: Path, rgb: NDArray[np.uint8]) -> None:
 
 
 def _dump(path: Path, obj: Any) -> None:
-    path.write_text(json.dumps(obj, indent=1) + "\n", encoding="utf-8")
+    """Write JSON atomically (a temporary sibling renamed into place)."""
+    tmp = path.with_name(f".{path.name}.tmp")
+    tmp.write_text(json.dumps(obj, indent=1) + "\n", encoding="utf-8")
+    os.replace(tmp, path)
 
 
 def generate_scene(
@@ -594,6 +597,8 @@ def generate_scene(
         )
         _dump(tmp / "calib.json", rig.calibration())
         _dump(tmp / "truth.json", truth)
+        # mkdtemp makes the folder private (0700); a scene is ordinary output, readable by all
+        tmp.chmod(0o755)
         if scene_dir.exists():
             shutil.rmtree(scene_dir)
         os.replace(tmp, scene_dir)
@@ -741,6 +746,10 @@ def generate_dataset(
                 if p.is_dir() and (p.name.startswith("scene_") or p.name == "objects"):
                     shutil.rmtree(p)
     out.mkdir(parents=True, exist_ok=True)
+    # temporary scene folders left by an interrupted run (see generate_scene)
+    for p in out.glob(".scene_*-*"):
+        if p.is_dir():
+            shutil.rmtree(p, ignore_errors=True)
     _dump(out / "dataset.json", meta)
     total = (len(CATALOGUE) if views else 0) + n_scenes
     done = 0
