@@ -103,6 +103,9 @@ def main() -> None:
     res = stereo_points(L, R, r)
     p = res.points
     score("stereo_points (default): + dense check", p.left_xy, p.right_xy, p.xyz[:, 2], gt)
+    res = stereo_points(L, R, r, dense_crop=True)
+    p = res.points
+    score("stereo_points(dense_crop=True)", p.left_xy, p.right_xy, p.xyz[:, 2], gt)
 
     print(f"\nTimings, median of {args.repeat} runs (ms; shared 2-core machine, noisy)")
     t_sift, _ = timed(
@@ -140,6 +143,7 @@ def main() -> None:
     )
     t_all, _ = timed(lambda: stereo_points(L, R, r), args.repeat)
     t_plain, _ = timed(lambda: stereo_points(L, R, r, verify=False), args.repeat)
+    t_crop, _ = timed(lambda: stereo_points(L, R, r, dense_crop=True), args.repeat)
     rows = [
         ("SIFT, both images", t_sift),
         ("candidates (distance matrix + band pairs)", t_cand),
@@ -150,6 +154,7 @@ def main() -> None:
         ("dense SGBM on a 140x120 crop (roi)", t_roi),
         ("stereo_points, whole call (default)", t_all),
         ("stereo_points(verify=False), whole call", t_plain),
+        ("stereo_points(dense_crop=True), whole call", t_crop),
     ]
     for name, t in rows:
         print(f"  {name:50s} {t:8.1f}")

@@ -445,6 +445,103 @@ def test_stray_matches_do_not_make_an_object(built_db: Path, scene: Scene) -> No
     assert [d.label for d in few_lenient.detections] == ["rocket"]  # the check can pass
 
 
+def _placed(donor: Features, picks: NDArray[np.intp], h: NDArray[np.float64]) -> Features:
+    """Donor keypoints carried into a scene by a similarity ``h`` (positions, sizes, angles)."""
+    f = donor.subset(picks)
+    s = float(np.sqrt(abs(np.linalg.det(h[:2, :2]))))
+    rot = float(np.degrees(np.arctan2(h[1, 0], h[0, 0])))
+    return Features(
+        xy=_warp_pts(h, f.xy),
+        size=(f.size * s).astype(np.float32),
+        angle=((f.angle + rot) % 360.0).astype(np.float32),
+        response=f.response,
+        octave=f.octave,
+        descriptors=f.descriptors,
+    )
+
+
+def _concat(a: Features, b: Features) -> Features:
+    return Features(
+        xy=np.vstack([a.xy, b.xy]),
+        size=np.concatenate([a.size, b.size]),
+        angle=np.concatenate([a.angle, b.angle]),
+        response=np.concatenate([a.response, b.response]),
+        octave=np.concatenate([a.octave, b.octave]),
+        descriptors=np.vstack([a.descriptors, b.descriptors]),
+    )
+
+
+def test_small_far_object_needs_fewer_inliers(built_db: Path, scene: Scene) -> None:
+    rocket = detect(scene.objects["rocket"])
+    rng = np.random.default_rng(5)
+    # keypoints at distinct positions (SIFT repeats a position once per orientation)
+    _, first = np.unique(np.rint(rocket.xy), axis=0, return_index=True)
+    picks = rng.choice(first, 6, replace=False)
+    # The rocket (220 x 420 px) seen 7x smaller, ~31 x 60 px: only 6 of its keypoints survive.
+    far = _similarity(1 / 7, 8, 400, 300)
+    small = _concat(scene.background_features, _placed(rocket, picks, far))
+    # The same 6 keypoints on a full-size rocket: a big outline with 6 inliers is not enough.
+    big = _concat(scene.background_features, _placed(rocket, picks, _similarity(1, 8, 300, 100)))
+    # And 6 scattered over a small area with random sizes and angles: no geometry.
+    stray = _placed(rocket, picks, far)
+    stray = Features(
+        xy=stray.xy + rng.uniform(-25, 25, stray.xy.shape),
+        size=stray.size * rng.uniform(0.3, 3, len(picks)).astype(np.float32),
+        angle=rng.uniform(0, 360, len(picks)).astype(np.float32),
+        response=stray.response,
+        octave=stray.octave,
+        descriptors=stray.descriptors,
+    )
+    scattered = _concat(scene.background_features, stray)
+    n_bg = len(scene.background_features)
+    with ObjectDatabase.open(built_db, readonly=True) as db:
+        found = db.label(small)  # the defaults: min_inliers 8, min_inliers_small 5
+        off = db.label(small, small_area=0)
+        big_result = db.label(big)
+        stray_result = db.label(scattered)
+    assert [d.label for d in found.detections] == ["rocket"]
+    det = found.detections[0]
+    assert set(det.inliers.tolist()) <= set(range(n_bg, n_bg + 6)) and det.score >= 5
+    true = _warp_pts(far, _corners(scene.objects["rocket"]))
+    assert np.abs(det.outline_in_scene - true).max() < 2.0
+    assert off.detections == ()  # without the small-object rule: below min_inliers = 8
+    assert big_result.detections == ()
+    assert stray_result.detections == ()
+
+
+def test_matches_split_between_views_are_pooled(tmp_path: Path, scene: Scene) -> None:
+    # Two overlapping training views of one photo (its left and right parts): a keypoint of the
+    # shared middle has a near-copy in both, and which one is its nearest neighbour is chance.
+    cat = scene.objects["cat"]
+    left, right = cat[:, :190], cat[:, 110:]
+    fl, fr = detect(left), detect(right)
+    # keypoints of the middle found in both views at the same place (and orientation)
+    d = np.linalg.norm((fl.xy - [110, 0])[:, None, :] - fr.xy[None], axis=2)
+    da = np.abs((fl.angle[:, None] - fr.angle[None] + 180) % 360 - 180)
+    pairs = [(i, int(np.argmin(d[i]))) for i in range(len(fl)) if d[i].min() < 0.3]
+    pairs = [(i, j) for i, j in pairs if da[i, j] < 3 and 0.02 < fl.xy[i, 0] - 110]
+    assert len(pairs) >= 12
+    pairs = pairs[:12]
+    # The scene holds the 12 keypoints, half of them with the left view's descriptor and half
+    # with the right view's: 6 nearest neighbours in each view, 12 correspondences in each.
+    idx_l = np.array([i for i, _ in pairs])
+    idx_r = np.array([j for _, j in pairs])
+    h = _similarity(0.9, 5, 300, 200)
+    query = _placed(fl, idx_l, h)
+    desc = query.descriptors.copy()
+    desc[1::2] = fr.descriptors[idx_r[1::2]]
+    query = Features(query.xy, query.size, query.angle, query.response, query.octave, desc)
+    query = _concat(scene.background_features, query)
+    with ObjectDatabase.open(tmp_path / "two-views.db", create=True) as db:
+        db.add_object("cat", [left, right])
+        db.add_object("coffee", [scene.objects["coffee"]])
+        result = db.label(query)
+        views = result.matched[-12:]
+    assert (views >= 0).all()
+    assert [d.label for d in result.detections] == ["cat"]
+    assert result.detections[0].score >= 10  # more than either view's 6 nearest neighbours
+
+
 def test_second_neighbour_comes_from_another_object(tmp_path: Path, scene: Scene) -> None:
     cat = scene.objects["cat"]
     # Two views of one object hold identical descriptors: the ratio test must not compare a

@@ -573,3 +573,44 @@ def test_cli_table(capsys: pytest.CaptureFixture[str]) -> None:
     assert language.main(["--table"]) == 0
     out = capsys.readouterr().out
     assert "The can is front-left of the hat." in out
+
+
+# -- One histogram computation shared by relate and the pipeline -----------------------------
+@pytest.mark.parametrize(
+    "a, b",
+    [
+        (cup_at(150), BOX),  # disjoint: F0 and F2 from one sweep
+        (rect(0, 0, 1, 1), rect(1, 0, 2, 1)),  # touching: hybrid F02
+        (disc(0.02, 1.0, 0.04), disc(0.0, 1.0, 0.15, 48)),  # inside: surrounded
+    ],
+)
+def test_pair_histograms_are_what_relate_decides_from(a: np.ndarray, b: np.ndarray) -> None:
+    pair = language.pair_histograms(a, b)
+    assert pair.f0.shape == pair.f2.shape == (N,)
+    rel = relate(a, b, argument="cup", referent="box")
+    assert rel.hybrid == pair.hybrid
+    same = language.relation_of_pair(pair, argument="cup", referent="box")
+    assert same.to_dict() == rel.to_dict()
+    back = relate(b, a, argument="box", referent="cup")
+    assert np.allclose(pair.reversed().f0, language.pair_histograms(b, a).f0, atol=1e-9)
+    # both ways at once: the reverse is bit for bit the reversed pair described on its own
+    ab, ba = language.relations_of_pair(pair, argument="cup", referent="box")
+    assert ab.to_dict() == rel.to_dict()
+    alone = language.relation_of_pair(pair.reversed(), argument="box", referent="cup")
+    assert ba.to_dict() == alone.to_dict()
+    assert (ba.primary, ba.secondary, ba.kind) == (back.primary, back.secondary, back.kind)
+
+
+def test_relations_of_pair_with_heights_gives_both_vertical_words() -> None:
+    mug = np.linspace(0.12, 0.22, 20)
+    can = np.linspace(0.0, 0.12, 30)
+    pair = language.pair_histograms(cup_at(180, r=0.01), BOX)
+    ab, ba = language.relations_of_pair(
+        pair, argument="mug", referent="can", a_heights=mug, b_heights=can
+    )
+    assert (ab.vertical, ba.vertical) == ("on top of", "under")
+    assert ab.sentence == "The mug is on top of the can."
+    with pytest.raises(InputError):
+        language.relations_of_pair(pair, a_heights=mug)
+    with pytest.raises(InputError):
+        language.pair_histograms(BOX, BOX, directions=90)

@@ -241,3 +241,24 @@ def test_dbscan_matches_scikit_learn(pts: np.ndarray, eps: float, min_samples: i
     core[model.core_sample_indices_] = True
     a, b = ours[core], ref[core]
     assert np.array_equal(a[:, None] == a[None, :], b[:, None] == b[None, :])
+
+
+@pytest.mark.parametrize("n", [300, 1300])
+def test_dbscan_small_and_large_paths_agree_with_scikit_learn(n: int) -> None:
+    # up to 1,200 points dbscan works on the distance matrix, beyond on a k-d tree
+    from sklearn.cluster import DBSCAN
+
+    rng = np.random.default_rng(n)
+    centres = rng.uniform(0, 1, (4, 2))
+    pts = np.vstack([rng.normal(c, 0.02, (n // 5, 2)) for c in centres])
+    pts = np.vstack([pts, rng.uniform(0, 1, (n - len(pts), 2))])  # and scattered noise
+    ours = dbscan(pts, eps=0.02, min_samples=4)
+    model = DBSCAN(eps=0.02, min_samples=4).fit(pts)
+    assert np.array_equal(ours == -1, model.labels_ == -1)
+    core = np.zeros(n, bool)
+    core[model.core_sample_indices_] = True
+    a, b = ours[core], model.labels_[core]
+    assert np.array_equal(a[:, None] == a[None, :], b[:, None] == b[None, :])
+    # clusters are numbered by their first core point
+    firsts = [int(np.flatnonzero(core & (ours == k))[0]) for k in range(ours.max() + 1)]
+    assert firsts == sorted(firsts)

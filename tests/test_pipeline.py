@@ -258,3 +258,18 @@ def test_rendered_relations_and_centroids(rendered: Path) -> None:
     # are. On these seeds 4-6 of 13-14 objects are described, so the floor is low.
     assert described >= 0.25 * present, f"{described}/{present} objects described"
     assert checked_relations >= 2
+
+
+def test_cropped_dense_map_describes_the_scene_like_the_full_one(card_db: Path) -> None:
+    full = _describe(NEAR, card_db, dense_crop=False)
+    crop = _describe(NEAR, card_db, dense_crop=True)
+    assert [o.label for o in crop.objects] == [o.label for o in full.objects]
+    for a, b in zip(crop.objects, full.objects, strict=True):
+        assert np.linalg.norm(a.plane_centroid - b.plane_centroid) < 0.01
+    assert [r.sentence for r in crop.relations] == [r.sentence for r in full.relations]
+    # the map was computed around the scene only: NaN far from every keypoint and outline
+    assert full.stereo.dense.valid_fraction() > crop.stereo.dense.valid_fraction()
+    # each unordered pair's histograms are computed once: the reverse is the same turned by 180°
+    ab = crop.relation("astronaut", "chelsea")
+    ba = crop.relation("chelsea", "astronaut")
+    assert np.array_equal(ba.f0, np.roll(ab.f0, 90)) and np.array_equal(ba.f2, np.roll(ab.f2, 90))

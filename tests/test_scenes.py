@@ -220,7 +220,9 @@ def test_training_views_and_masks(tmp_path: Path) -> None:
     from scenespeak.scenes import render_training_views
 
     paths = render_training_views(CATALOGUE[3], tmp_path / "can", image_size=(160, 120))
-    assert len(paths) == 4
+    assert CATALOGUE[3].shape == "cylinder"
+    assert len(paths) == 8  # a cylinder is seen all round: every 45 degrees
+    assert [p.name for p in paths] == [f"view_{k:02d}.png" for k in range(8)]
     for p in paths:
         img = cv2.imread(str(p))
         mask = cv2.imread(str(p).replace(".png", "_mask.png"), cv2.IMREAD_GRAYSCALE)
@@ -345,3 +347,42 @@ def test_scene_folders_are_readable_and_stale_temporaries_are_removed(tmp_path: 
     assert not stale.exists()
     assert [p.name for p in load_dataset(out).scenes] == ["scene_000", "scene_001"]
     assert not list(out.glob(".*"))
+
+
+def test_cylinder_turned_between_the_old_views_is_recognised_at_1_5_m(tmp_path: Path) -> None:
+    """A mug 1.47 m away, turned 110 degrees (its side between the old views at 30 and 180
+    degrees), is found by the database learnt from its eight training views, and was not with
+    the four views (front, +-30, back) the generator used to render."""
+    from scenespeak.database import ObjectDatabase
+    from scenespeak.features import detect, load_image
+    from scenespeak.scenes import VIEW_YAWS, render_training_views, view_yaws
+
+    by_label = {o.label: o for o in CATALOGUE}
+    mug, box = by_label["mug"], by_label["box"]
+    assert len(view_yaws(mug)) == 8 and len(view_yaws(box)) == 4
+    views = {
+        "mug": render_training_views(mug, tmp_path / "mug"),
+        "mug-old": render_training_views(mug, tmp_path / "mug-old", yaws=VIEW_YAWS),
+        "box": render_training_views(box, tmp_path / "box"),
+    }
+    scene = generate_scene(
+        tmp_path / "scene",
+        layout=[Placement(mug, (0.15, 1.45, 0.0), 110.0), Placement(box, (-0.3, 1.0, 0.0), 10.0)],
+    )
+    truth = load_truth(scene)
+    assert 1.4 < truth.object("mug").distance < 1.55
+    feats = detect(load_image(scene / "left.png", gray=True), precise_upscale=False)
+    labels = cv2.imread(str(scene / "left_labels.png"), cv2.IMREAD_UNCHANGED)
+    found = {}
+    for name in ("mug", "mug-old"):
+        with ObjectDatabase.open(tmp_path / f"{name}.db", create=True) as db:
+            for label, paths in (("mug", views[name]), ("box", views["box"])):
+                masks = [v.with_name(v.stem + "_mask.png") for v in paths]
+                db.add_object(label, paths, masks=masks)
+            # the pipeline's settings (PipelineOptions: ratio 0.8, min_inliers 8)
+            found[name] = db.label(feats, ratio=0.8, min_inliers=8).detection("mug")
+    assert found["mug-old"] is None
+    det = found["mug"]
+    assert det is not None and det.score >= 8
+    xy = np.rint(feats.xy[det.inliers]).astype(int)
+    assert (labels[xy[:, 1], xy[:, 0]] == truth.object("mug").index).all()

@@ -405,3 +405,33 @@ def test_match_stereo_with_dense_reproduces_stereo_points(moto_result: StereoRes
     # the band search alone finds more (and worse) matches; the dense check thins them
     band = match_stereo(r.features_left, r.features_right, r.rect, search="band", ratio=0.8)
     assert len(band) > len(m) + 100
+
+
+def test_dense_crop_on_motorcycle_keeps_the_accuracy(
+    motorcycle: tuple[np.ndarray, np.ndarray, np.ndarray], moto_result: StereoResult
+) -> None:
+    # SGBM over the bounding box of the keypoints to verify (and a given region) only
+    left, right, disp = motorcycle
+    roi = (300, 200, 400, 260)
+    res = stereo_points(left, right, motorcycle_rig(), dense_crop=True, dense_roi=roi)
+    err_px, _ = _gt_errors(res.points, disp)
+    assert len(res.points) >= 750
+    assert np.mean(err_px <= 1.0) >= 0.97
+    assert res.dense is not None
+    known = np.isfinite(res.dense.disparity)
+    ys, xs = np.nonzero(known)
+    lx = res.matches.left_rect
+    assert xs.min() >= np.floor(lx[:, 0].min()) - 6 and ys.min() >= np.floor(lx[:, 1].min()) - 6
+    assert known[200:260, 300:400].mean() > 0.5  # the given region is covered
+    # a pair whose keypoints sit in one corner: the map stops near them
+    h, w = left.shape[:2]
+    small = stereo_points(
+        left[: h // 2, : w // 2], right[: h // 2, : w // 2], _half_rig(), dense_crop=True
+    )
+    assert small.dense is not None and len(small.points) > 50
+
+
+def _half_rig() -> StereoRig:
+    K1 = [[F, 0, CX], [0, F, CY], [0, 0, 1]]
+    K2 = [[F, 0, CX + DOFFS], [0, F, CY], [0, 0, 1]]
+    return StereoRig((370, 250), K1, K2, None, None, np.eye(3), [-B, 0, 0])

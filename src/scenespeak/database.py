@@ -27,8 +27,11 @@ near-copies of the same descriptor; comparing against those would reject exactly
 matches), then per training view a RANSAC homography (a similarity where there are few matches)
 between the training keypoints and the scene's, with each inlier's SIFT scale and orientation
 checked against the model; an object is accepted only with ``min_inliers`` inliers, so a few
-stray matches never make an object. Query keypoints keep the label ``-1`` unless they are
-inliers of an accepted detection.
+stray matches never make an object (a small, far one, whose outline covers at most
+``small_area`` pixels, with ``min_inliers_small`` inliers at distinct positions). A query's
+matches into every view of its object are checked, not only its single nearest neighbour's, so
+matches split between near-identical views are pooled. Query keypoints keep the label ``-1``
+unless they are inliers of an accepted detection.
 
 >>> import numpy as np
 >>> from skimage import data
@@ -967,12 +970,14 @@ def _read_mask(item: MaskLike, i: int, shape: tuple[int, ...]) -> NDArray[np.boo
     return m
 
 
-def _extract_view(image: ImageLike, mask: MaskLike, i: int, max_features: int) -> _ViewData:
+def _extract_view(
+    image: ImageLike, mask: MaskLike, i: int, max_features: int, contrast_threshold: float
+) -> _ViewData:
     gray = _read_image(image, i)
     h, w = gray.shape
     m = _read_mask(mask, i, (h, w))
     source = _source_name(image, i, "image")
-    feats = detect(gray, mask=m, max_features=max_features)
+    feats = detect(gray, mask=m, max_features=max_features, contrast_threshold=contrast_threshold)
     if len(feats) == 0:
         raise ImageError(
             source,
@@ -1064,6 +1069,31 @@ def _plausible(
         return False
     scale = math.sqrt(sv[0] * sv[1])
     return 1.0 / 64.0 <= scale <= 64.0
+
+
+def _polygon_area(poly: NDArray[np.float64]) -> float:
+    """Area of a simple polygon (shoelace), square pixels."""
+    x, y = poly[:, 0], poly[:, 1]
+    return float(abs(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1))) / 2.0)
+
+
+def _small_enough(
+    outline_in_scene: NDArray[np.float64],
+    inlier_xy: NDArray[np.float64],
+    small_area: float,
+    min_inliers_small: int,
+) -> bool:
+    """Whether a detection with fewer than ``min_inliers`` inliers may still be accepted.
+
+    A far object covers few pixels and so carries few keypoints; a large projected outline
+    with only a handful of inliers is more likely a chance agreement. Inliers are counted at
+    distinct positions (SIFT gives one keypoint per dominant orientation at one place, and
+    those copies are no independent evidence).
+    """
+    if small_area <= 0 or not np.all(np.isfinite(outline_in_scene)):
+        return False
+    distinct = np.unique(np.rint(inlier_xy), axis=0).shape[0]
+    return distinct >= min_inliers_small and _polygon_area(outline_in_scene) <= small_area
 
 
 def _fit_view(
@@ -1368,6 +1398,7 @@ class ObjectDatabase:
         *,
         replace: bool = False,
         max_features: int = 0,
+        contrast_threshold: float = 0.04,
         progress: Progress | None = None,
     ) -> ObjectInfo:
         """Learn an object from training images and store it, in one transaction.
@@ -1386,6 +1417,9 @@ class ObjectDatabase:
             Replace an object with the same label instead of failing.
         max_features : int
             Keep at most this many of the strongest keypoints per image (0: all).
+        contrast_threshold : float
+            SIFT's contrast threshold for the training images (see
+            :func:`scenespeak.features.detect`).
         progress : callable, optional
             Called as ``progress(stage, done, total)`` with stage ``"extract"`` (per image,
             before anything is written) and ``"store"`` (per view written).
@@ -1420,7 +1454,7 @@ class ObjectDatabase:
             raise DatabaseError(self.path, _duplicate(label))
         views: list[_ViewData] = []
         for i, (img, msk) in enumerate(zip(images, mask_list, strict=True)):
-            views.append(_extract_view(img, msk, i, max_features))
+            views.append(_extract_view(img, msk, i, max_features, contrast_threshold))
             if progress is not None:
                 progress("extract", i + 1, len(images))
         conn = self.conn
@@ -1671,12 +1705,14 @@ class ObjectDatabase:
         ratio: float = 0.8,
         min_inliers: int = 8,
         ransac_threshold: float = 4.0,
-        k: int = 8,
+        k: int = 16,
         homography_min: int = 12,
         max_scale_ratio: float = 2.0,
         max_angle_deg: float = 30.0,
         max_views: int = 3,
         nprobe: int = 4,
+        min_inliers_small: int = 6,
+        small_area: float = 4000.0,
     ) -> Labelling:
         """Label query keypoints (of the scene's left image) with the database's objects.
 
@@ -1700,9 +1736,17 @@ class ObjectDatabase:
         max_scale_ratio, max_angle_deg : float
             Each inlier's SIFT scale and orientation must agree with the model this closely.
         max_views : int
-            Training views per object tried, most matched first.
+            Training views per object tried, most matched first. A query that passed the
+            ratio test is a candidate in every view of its object where one of its ``k``
+            neighbours lies and passes the ratio test too (the nearest such one per view), so
+            matches split between near-identical views are pooled.
         nprobe : int
             Inverted-file cells visited per query descriptor (large databases only).
+        min_inliers_small : int
+            Inliers at distinct positions enough to accept a *small* detection (its outline in
+            the scene covers at most ``small_area``): far objects carry few keypoints.
+        small_area : float
+            Largest outline area, in square pixels, for the small-detection rule (0: off).
 
         Returns
         -------
@@ -1716,6 +1760,7 @@ class ObjectDatabase:
         self.load(nprobe=nprobe)
         db = self._loaded
         assert db is not None
+        need = min(min_inliers, min_inliers_small) if small_area > 0 else min_inliers
         nq = len(features)
         labels = np.full(nq, -1, np.int32)
         matched = np.full(nq, -1, np.int32)
@@ -1730,22 +1775,34 @@ class ObjectDatabase:
         has_other = other.any(axis=1)
         j2 = np.argmax(other, axis=1)
         d2 = np.where(has_other, dist[np.arange(nq), j2], dist[:, -1])
-        passed = valid & (dist[:, 0] < (ratio * ratio) * d2)
+        limit = (ratio * ratio) * d2
+        passed = valid & (dist[:, 0] < limit)
         matched[passed] = first_obj[passed]
-        q_idx = np.flatnonzero(passed)
-        t_idx = ids[q_idx, 0]
+        # Candidate correspondences: for a query that passed, every fetched neighbour of the
+        # same object that passes the ratio test too (its copies in the object's other views:
+        # the same surface point seen from another side or distance), the nearest per view.
+        # Each training view is then checked with all the queries that match into it, not only
+        # those whose single nearest neighbour happened to lie in it.
+        cand = passed[:, None] & (obj == first_obj[:, None]) & (ids >= 0) & (dist < limit[:, None])
+        rows, cols = np.nonzero(cand)  # row-major: nearest first within each query
+        t_all = ids[rows, cols]
+        v_all = db.view_of[t_all].astype(np.int64)
+        key = rows.astype(np.int64) * (int(db.view_of.max()) + 1) + v_all
+        _, first = np.unique(key, return_index=True)
+        q_idx = rows[first].astype(np.intp)
+        t_idx = t_all[first]
         view = db.view_of[t_idx]
 
         candidates: list[tuple[float, Detection, NDArray[np.intp]]] = []
         for oid in np.unique(first_obj[q_idx]).tolist():
             sel_o = first_obj[q_idx] == oid
             vids, counts = np.unique(view[sel_o], return_counts=True)
-            if counts.max() < min_inliers:
+            if counts.max() < need:
                 continue
             best: tuple[int, Detection] | None = None
             for vid in vids[np.argsort(-counts, kind="stable")][:max_views].tolist():
                 sel = sel_o & (view == vid)
-                if sel.sum() < min_inliers:
+                if sel.sum() < need:
                     break
                 qi = q_idx[sel]
                 ti = t_idx[sel]
@@ -1766,14 +1823,19 @@ class ObjectDatabase:
                 if fit is None:
                     continue
                 n_in = int(fit.inliers.sum())
-                if n_in < min_inliers or (best is not None and n_in <= best[0]):
+                if n_in < need or (best is not None and n_in <= best[0]):
+                    continue
+                in_scene = _apply_h(fit.h, outline.astype(np.float64))
+                if n_in < min_inliers and not _small_enough(
+                    in_scene, features.xy[qi[fit.inliers]], small_area, min_inliers_small
+                ):
                     continue
                 det = Detection(
                     label=db.labels[oid],
                     view_id=int(vid),
                     homography=fit.h,
                     inliers=np.sort(qi[fit.inliers]).astype(np.intp),
-                    outline_in_scene=_apply_h(fit.h, outline.astype(np.float64)),
+                    outline_in_scene=in_scene,
                     score=float(n_in),
                     model=fit.model,
                     matches=int(sel.sum()),

@@ -49,12 +49,16 @@ __all__ = [
     "OBJECT_PATTERNS",
     "VERTICAL_WORDS",
     "VIEWER_PATTERNS",
+    "PairHistograms",
     "Relation",
     "Thresholds",
     "describe_relation",
     "describe_viewer_relation",
     "layout_table",
+    "pair_histograms",
     "relate",
+    "relation_of_pair",
+    "relations_of_pair",
     "summarize_scene",
     "update_doc_table",
     "vertical_relation",
@@ -663,9 +667,9 @@ def _relation_from(
     vertical: str | None,
     hybrid: bool,
     frame: str,
+    degrees: tuple[dict[str, DirectionDegree], dict[str, DirectionDegree]] | None = None,
 ) -> Relation:
-    deg0 = four_degrees(h0)
-    deg2 = four_degrees(h2)
+    deg0, deg2 = (four_degrees(h0), four_degrees(h2)) if degrees is None else degrees
     decision = _decide(deg0, deg2, h0, t, overlap, referent_overlap)
     horizontal = _render(decision, argument, referent, frame)
     sentence = _render(decision, argument, referent, frame, vertical)
@@ -798,6 +802,238 @@ def _histograms(
     return f0, np.asarray(f02, dtype=np.float64), True
 
 
+@dataclass(frozen=True, eq=False)
+class PairHistograms:
+    """The force histograms of one pair of polygons and how much their footprints overlap.
+
+    What :func:`relate` decides from, returned by :func:`pair_histograms` so that a caller
+    that must keep the histograms (the pipeline's JSON) computes them once.
+
+    Attributes
+    ----------
+    f0, f2 : (directions,) float64
+        F0 and F2 of the argument relative to the referent (bin ``k`` at ``2πk/directions``);
+        ``f2`` is the hybrid F02 where F2 is undefined (``hybrid``).
+    hybrid : bool
+        True when the polygons touch or intersect and ``f2`` is the hybrid F02.
+    intersection : float
+        area(A ∩ B).
+    area_a, area_b : float
+        Areas of the argument and of the referent.
+    """
+
+    f0: NDArray[np.float64]
+    f2: NDArray[np.float64]
+    hybrid: bool
+    intersection: float
+    area_a: float
+    area_b: float
+
+    @property
+    def intersecting(self) -> bool:
+        """Whether the interiors overlap (beyond rounding)."""
+        return self.intersection > 1e-12 * min(self.area_a, self.area_b)
+
+    @property
+    def overlap(self) -> float:
+        """area(A ∩ B) / area(A), 0 for disjoint polygons (``describe_relation``'s ``overlap``)."""
+        return self.intersection / self.area_a if self.intersecting else 0.0
+
+    @property
+    def referent_overlap(self) -> float:
+        """area(A ∩ B) / area(B), 0 for disjoint polygons."""
+        return self.intersection / self.area_b if self.intersecting else 0.0
+
+    @property
+    def horizontal_overlap(self) -> float:
+        """area(A ∩ B) / min(area(A), area(B)) (``vertical_relation``'s ``horizontal_overlap``)."""
+        return self.intersection / max(min(self.area_a, self.area_b), 1e-300)
+
+    def reversed(self) -> PairHistograms:
+        """The same pair seen the other way round: F(B, A)(θ) = F(A, B)(θ + π).
+
+        Examples
+        --------
+        >>> sq = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
+        >>> p = pair_histograms(sq, sq + [3.0, 0.0], directions=8)
+        >>> int(np.argmax(p.f0)), int(np.argmax(p.reversed().f0))   # 180° (left), then 0°
+        (4, 0)
+        """
+        half = self.f0.size // 2
+        return PairHistograms(
+            np.roll(self.f0, half),
+            np.roll(self.f2, half),
+            self.hybrid,
+            self.intersection,
+            self.area_b,
+            self.area_a,
+        )
+
+
+def pair_histograms(a: ArrayLike, b: ArrayLike, *, directions: int = 180) -> PairHistograms:
+    """F0 and F2 (or the hybrid F02) of polygon ``a`` relative to polygon ``b``, and their overlap.
+
+    Disjoint polygons get F0 and F2 from one sweep of
+    :func:`scenespeak.forces.force_histograms`; where F2 is undefined (the polygons touch or
+    intersect) ``f2`` is :func:`scenespeak.forces.hybrid_histogram` and ``hybrid`` is True.
+    :func:`relate` describes the pair from this; ``result.reversed()`` gives the pair the
+    other way round without computing anything again.
+
+    Parameters
+    ----------
+    a, b : array_like, shape (N, 2)
+        Vertices of the argument and the referent (the horizontal plane's 2-D frame, metres).
+    directions : int
+        Histogram bins (a multiple of 4, >= 8).
+
+    Returns
+    -------
+    PairHistograms
+
+    Raises
+    ------
+    InputError
+        For polygons that are not ``(N >= 3, 2)`` finite vertex arrays with an area, or a bad
+        ``directions``.
+
+    Examples
+    --------
+    >>> hat = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
+    >>> p = pair_histograms(hat, hat + [3.0, 0.0])
+    >>> p.f0.shape, p.hybrid, int(np.argmax(p.f2))           # bin 90 = 180°: to the left
+    ((180,), False, 90)
+    """
+    pa = as_polygon(a, "argument polygon")
+    pb = as_polygon(b, "referent polygon")
+    if directions < 8 or directions % 4:
+        raise InputError("directions", f"must be a multiple of 4 and >= 8, got {directions}")
+    inter = intersection_area(pa, pb)
+    area_a, area_b = abs(polygon_area(pa)), abs(polygon_area(pb))
+    f0, f2, hybrid = _histograms(pa, pb, directions, inter > 1e-12 * min(area_a, area_b))
+    return PairHistograms(
+        _as_histogram(f0, "f0"), _as_histogram(f2, "f2"), hybrid, inter, area_a, area_b
+    )
+
+
+def relation_of_pair(
+    pair: PairHistograms,
+    *,
+    argument: str = "A",
+    referent: str = "B",
+    a_heights: ArrayLike | None = None,
+    b_heights: ArrayLike | None = None,
+    thresholds: Thresholds | None = None,
+) -> Relation:
+    """Describe a pair from its :class:`PairHistograms` (the second half of :func:`relate`).
+
+    The overlaps decide "surrounded" / "surrounds"; when both objects' heights are given, the
+    vertical relation (:func:`vertical_relation`) takes precedence in ``sentence``.
+
+    Examples
+    --------
+    >>> hat = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
+    >>> p = pair_histograms(hat, hat + [3.0, 0.0])
+    >>> relation_of_pair(p.reversed(), argument="mug", referent="hat").sentence
+    'The mug is directly to the right of the hat.'
+    """
+    t = thresholds or DEFAULT_THRESHOLDS
+    argument = _label(argument, "argument")
+    referent = _label(referent, "referent")
+    vertical = None
+    if (a_heights is None) != (b_heights is None):
+        raise InputError("a_heights/b_heights", "give the heights of both objects, or neither")
+    if a_heights is not None and b_heights is not None:
+        vertical = vertical_relation(
+            a_heights, b_heights, horizontal_overlap=pair.horizontal_overlap, thresholds=t
+        )
+    return _relation_from(
+        pair.f0,
+        pair.f2,
+        argument,
+        referent,
+        t,
+        overlap=pair.overlap,
+        referent_overlap=pair.referent_overlap,
+        vertical=vertical,
+        hybrid=pair.hybrid,
+        frame="object",
+    )
+
+
+_OPPOSITE = {"right": "left", "behind": "front", "left": "right", "front": "behind"}
+
+
+def relations_of_pair(
+    pair: PairHistograms,
+    *,
+    argument: str = "A",
+    referent: str = "B",
+    a_heights: ArrayLike | None = None,
+    b_heights: ArrayLike | None = None,
+    thresholds: Thresholds | None = None,
+) -> tuple[Relation, Relation]:
+    """Both relations of a pair: the argument's to the referent's, and back.
+
+    The same as ``relation_of_pair(pair, ...)`` and ``relation_of_pair(pair.reversed(), ...)``
+    with the labels and heights swapped, but the degrees of truth are computed once: F(B, A)
+    is F(A, B) turned by 180°, so B's degree for "left" is A's for "right" (bit for bit: the
+    reversed histogram is a rotation of the same bins).
+
+    Examples
+    --------
+    >>> hat = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
+    >>> ab, ba = relations_of_pair(pair_histograms(hat, hat + [3.0, 0.0]), argument="hat",
+    ...                            referent="mug")
+    >>> ab.primary, ba.primary, ba.sentence
+    ('left', 'right', 'The mug is directly to the right of the hat.')
+    """
+    t = thresholds or DEFAULT_THRESHOLDS
+    argument = _label(argument, "argument")
+    referent = _label(referent, "referent")
+    if (a_heights is None) != (b_heights is None):
+        raise InputError("a_heights/b_heights", "give the heights of both objects, or neither")
+    if pair.f0.size % 4 or pair.f0.size < 8 or pair.f2.size != pair.f0.size:
+        raise InputError("pair", "histograms must have one length, a multiple of 4 (>= 8)")
+    deg0, deg2 = four_degrees(pair.f0), four_degrees(pair.f2)
+    back = pair.reversed()
+    out = []
+    for p, arg, ref, ha, hb, degrees in (
+        (pair, argument, referent, a_heights, b_heights, (deg0, deg2)),
+        (
+            back,
+            referent,
+            argument,
+            b_heights,
+            a_heights,
+            (
+                {d: deg0[_OPPOSITE[d]] for d in DIRECTIONS},
+                {d: deg2[_OPPOSITE[d]] for d in DIRECTIONS},
+            ),
+        ),
+    ):
+        vertical = None
+        if ha is not None and hb is not None:
+            vertical = vertical_relation(
+                ha, hb, horizontal_overlap=p.horizontal_overlap, thresholds=t
+            )
+        out.append(
+            _relation_from(
+                p.f0,
+                p.f2,
+                arg,
+                ref,
+                t,
+                overlap=p.overlap,
+                referent_overlap=p.referent_overlap,
+                vertical=vertical,
+                hybrid=p.hybrid,
+                frame="object",
+                degrees=degrees,
+            )
+        )
+    return out[0], out[1]
+
+
 def relate(
     a: ArrayLike,
     b: ArrayLike,
@@ -838,36 +1074,17 @@ def relate(
     >>> relate(hat, hat + [3.0, 0.0], argument="hat", referent="mug").sentence
     'The hat is directly to the left of the mug.'
     """
-    t = thresholds or DEFAULT_THRESHOLDS
-    pa = as_polygon(a, "argument polygon")
-    pb = as_polygon(b, "referent polygon")
     argument = _label(argument, "argument")
     referent = _label(referent, "referent")
-    if directions < 8 or directions % 4:
-        raise InputError("directions", f"must be a multiple of 4 and >= 8, got {directions}")
-    inter = intersection_area(pa, pb)
-    area_a, area_b = abs(polygon_area(pa)), abs(polygon_area(pb))
-    intersecting = inter > 1e-12 * min(area_a, area_b)
-    f0, f2, hybrid = _histograms(pa, pb, directions, intersecting)
-    overlap = inter / area_a if intersecting else 0.0
-    vertical = None
     if (a_heights is None) != (b_heights is None):
         raise InputError("a_heights/b_heights", "give the heights of both objects, or neither")
-    if a_heights is not None and b_heights is not None:
-        vertical = vertical_relation(
-            a_heights, b_heights, horizontal_overlap=inter / min(area_a, area_b), thresholds=t
-        )
-    return _relation_from(
-        _as_histogram(f0, "f0"),
-        _as_histogram(f2, "f2"),
-        argument,
-        referent,
-        t,
-        overlap=overlap,
-        referent_overlap=inter / area_b if intersecting else 0.0,
-        vertical=vertical,
-        hybrid=hybrid,
-        frame="object",
+    return relation_of_pair(
+        pair_histograms(a, b, directions=directions),
+        argument=argument,
+        referent=referent,
+        a_heights=a_heights,
+        b_heights=b_heights,
+        thresholds=thresholds,
     )
 
 

@@ -9,14 +9,24 @@ stage's result in a frozen :class:`SceneDescription`:
    :meth:`scenespeak.database.ObjectDatabase.label`);
 3. the distance strategy: for each recognised object its training outline, carried into the left
    image by the fitted homography, selects a region whose depth is taken from dense stereo
-   (OpenCV StereoSGBM, computed once per pair over the disparity range the objects need), so
+   (OpenCV StereoSGBM, computed once per pair over the disparity range the keypoints need and
+   only over the bounding box of the keypoints it verifies and of the recognised outlines), so
    that a far object gets the hull of its visible surface rather than of three keypoints; the
    keypoints are the fallback;
 4. objects on the horizontal plane (:mod:`scenespeak.objects`): outlier removal, convex hull,
    unknown points clustered into "unknown object N"; objects that cannot be described are
    listed in ``skipped`` with the reason;
 5. every ordered pair of objects through the Histogram of Forces and the rule base
-   (:mod:`scenespeak.language`), with the heights along up for the vertical relations.
+   (:mod:`scenespeak.language`), with the heights along up for the vertical relations; each
+   unordered pair's histograms are computed once (``language.pair_histograms``) and read both
+   ways (``language.relations_of_pair``).
+
+Speed (``benchmarks/bench_pipeline.py --only timing``, 640×480 rendered pair, shared 2-core
+machine): the whole call takes about 1.3× the two SIFT extractions run one after the other and
+about 1.6–1.75× the two run in two threads as here; labelling, stereo, objects and relations
+take roughly 16 + 16 + 6 + 7 ms. Stages 2–5 run with BLAS limited to one thread (their
+matrices are small; a second OpenBLAS thread made a 200 × 128 × 200 product 150× slower when
+the other core was busy).
 
 :meth:`SceneDescription.to_dict` gives exactly the JSON of ``interfaces.md`` (plus extra
 fields); :meth:`SceneDescription.to_text` the sentences for people.
@@ -27,7 +37,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable, Iterator, Mapping
 from concurrent.futures import ThreadPoolExecutor
-from contextlib import contextmanager
+from contextlib import AbstractContextManager, contextmanager, nullcontext
 from dataclasses import dataclass, field
 from os import PathLike
 from pathlib import Path
@@ -70,6 +80,9 @@ class PipelineOptions:
         Fewer valid dense points than this: fall back to the keypoints.
     dense_max_points : int
         Dense points used per object (an even random sample of the region's pixels).
+    dense_crop : bool
+        Compute the dense map only over the bounding box of the keypoints it verifies and of
+        the recognised outlines (``stereo.stereo_points(dense_crop=True)``), not the whole image.
     unknown : bool
         Cluster unlabelled keypoints into unknown objects.
     unknown_max_distance : float
@@ -93,6 +106,7 @@ class PipelineOptions:
     dense: bool = True
     dense_min_points: int = 30
     dense_max_points: int = 300
+    dense_crop: bool = True
     unknown: bool = True
     unknown_max_distance: float = 2.5
     min_points: int = 3
@@ -295,62 +309,50 @@ def _points_inside(xy: NDArray[np.float64], mask: NDArray[np.bool_]) -> NDArray[
 def _relate_all(objects: tuple[SceneObject, ...], directions: int) -> list[PairRelation]:
     """Every ordered pair through the force histograms and the rule base.
 
-    ``language.relate`` does not return the histograms the JSON must carry, so the same steps
-    are taken here with the public functions (``forces.force_histogram`` /
-    ``hybrid_histogram``, ``language.vertical_relation``, ``language.describe_relation``);
-    F(B, A) is F(A, B) turned by 180°, so each unordered pair is computed once.
+    Each unordered pair is computed once (:func:`scenespeak.language.pair_histograms`: F0 and
+    F2 in one sweep, or the hybrid F02 where the hulls touch) and described both ways
+    (:func:`scenespeak.language.relations_of_pair`: F(B, A) is F(A, B) turned by 180°, so the
+    degrees of truth are computed once), with the heights along up for the vertical relations.
     """
-    from scenespeak import forces, language
+    from scenespeak.language import pair_histograms, relations_of_pair
 
     relations: list[PairRelation] = []
     n = len(objects)
-    half = directions // 2
     for i in range(n):
         for j in range(i + 1, n):
             a, b = objects[i], objects[j]
-            inter = forces.intersection_area(a.hull, b.hull)
-            area_a = abs(forces.polygon_area(a.hull))
-            area_b = abs(forces.polygon_area(b.hull))
-            intersecting = inter > 1e-12 * min(area_a, area_b)
-            f0 = np.asarray(
-                forces.force_histogram(a.hull, b.hull, r=0.0, directions=directions), float
+            pair = pair_histograms(a.hull, b.hull, directions=directions)
+            ab, ba = relations_of_pair(
+                pair,
+                argument=a.label,
+                referent=b.label,
+                a_heights=a.heights,
+                b_heights=b.heights,
             )
-            hybrid = intersecting
-            f2 = None
-            if not intersecting:
-                try:
-                    f2 = np.asarray(
-                        forces.force_histogram(a.hull, b.hull, r=2.0, directions=directions),
-                        float,
-                    )
-                    if not np.all(np.isfinite(f2)):
-                        f2 = None
-                except (ValueError, ArithmeticError):
-                    f2 = None
-            if f2 is None:
-                hybrid = True
-                f2 = np.asarray(forces.hybrid_histogram(a.hull, b.hull, directions=directions))
-            overlap_min = inter / max(min(area_a, area_b), 1e-300)
-            for arg, ref, h0, h2, area in (
-                (a, b, f0, f2, area_a),
-                (b, a, np.roll(f0, half), np.roll(f2, half), area_b),
-            ):
-                vertical = language.vertical_relation(
-                    arg.heights, ref.heights, horizontal_overlap=overlap_min
-                )
-                rel = language.describe_relation(
-                    h0,
-                    h2,
-                    arg.label,
-                    ref.label,
-                    overlap=inter / area if intersecting else 0.0,
-                    vertical=vertical,
-                    hybrid=hybrid,
-                )
-                relations.append(PairRelation(rel, h0, h2))
-    order = {(o.label): k for k, o in enumerate(objects)}
+            back = pair.reversed()
+            relations.append(PairRelation(ab, pair.f0, pair.f2))
+            relations.append(PairRelation(ba, back.f0, back.f2))
+    order = {o.label: k for k, o in enumerate(objects)}
     relations.sort(key=lambda r: (order[r.argument], order[r.referent]))
     return relations
+
+
+def _outlines_box(labelling: Any, shape: tuple[int, int]) -> tuple[float, ...] | None:
+    """Bounding box (x0, y0, x1, y1) of the recognised outlines inside the image, or None."""
+    h, w = shape
+    boxes = []
+    for d in labelling.detections:
+        xy = np.asarray(d.outline_in_scene, dtype=np.float64).reshape(-1, 2)
+        xy = xy[np.all(np.isfinite(xy), axis=1)]
+        if len(xy):
+            lo = np.clip(xy.min(axis=0), 0, [w, h])
+            hi = np.clip(xy.max(axis=0), 0, [w, h])
+            if np.all(hi > lo):
+                boxes.append((*lo, *hi))
+    if not boxes:
+        return None
+    b = np.array(boxes)
+    return (float(b[:, 0].min()), float(b[:, 1].min()), float(b[:, 2].max()), float(b[:, 3].max()))
 
 
 def describe_scene(
@@ -423,6 +425,41 @@ def describe_scene(
         feats_r = future_r.result()
     timings["sift"] -= timings["label"]
 
+    # The rest works on small matrices (a few hundred keypoints and points): OpenBLAS's second
+    # thread only costs there, and a lot when the other core is busy (a 200 x 128 x 200 product
+    # took 16 ms instead of 0.1 ms on the shared 2-core machine), so BLAS runs single-threaded.
+    with _single_threaded_blas():
+        return _after_sift(
+            left, right, rig, opts, src, timings, say, feats_l, feats_r, labelling, lname, rname
+        )
+
+
+def _single_threaded_blas() -> AbstractContextManager[object]:
+    """Limit BLAS to one thread for a ``with`` block (threadpoolctl, if installed)."""
+    try:
+        from threadpoolctl import threadpool_limits
+    except ImportError:  # pragma: no cover - scikit-learn depends on it
+        return nullcontext()
+    return threadpool_limits(limits=1, user_api="blas")
+
+
+def _after_sift(
+    left: NDArray[np.generic],
+    right: NDArray[np.generic],
+    rig: Any,
+    opts: PipelineOptions,
+    src: dict[str, str],
+    timings: dict[str, float],
+    say: Callable[[str], None],
+    feats_l: Any,
+    feats_r: Any,
+    labelling: Any,
+    lname: str,
+    rname: str,
+) -> SceneDescription:
+    """Stages 2-5 of :func:`describe_scene` once both images' features are known."""
+    from scenespeak import stereo
+
     say("stereo")
     with _timed(timings, "stereo"):
         result = stereo.stereo_points(
@@ -434,6 +471,8 @@ def describe_scene(
             features_right=feats_r,
             left_name=lname,
             right_name=rname,
+            dense_crop=opts.dense_crop,
+            dense_roi=_outlines_box(labelling, left.shape[:2]) if opts.dense else None,
         )
     points = result.points
     if len(points.xyz) == 0:

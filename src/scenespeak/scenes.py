@@ -34,7 +34,9 @@ from scenespeak.errors import InputError
 
 __all__ = [
     "CATALOGUE",
+    "CYLINDER_VIEW_YAWS",
     "FORMAT",
+    "VIEW_YAWS",
     "CatalogueObject",
     "Dataset",
     "Placement",
@@ -49,6 +51,7 @@ __all__ = [
     "load_truth",
     "make_rig",
     "sample_layout",
+    "view_yaws",
 ]
 
 FORMAT = "scenespeak-scenes/1"
@@ -57,6 +60,9 @@ DIAGONAL_TOLERANCE_DEG = 20.0
 HIDDEN_THRESHOLD = 0.5
 CLEARANCE = 0.03
 VIEW_YAWS = (0.0, 30.0, -30.0, 180.0)
+#: Training-view yaws of cylinders: every 45° (a cylinder stands at any yaw in the scenes, and
+#: its wrapped photo is recognised only near the middle of a view, where it faces the camera).
+CYLINDER_VIEW_YAWS = (0.0, 45.0, -45.0, 90.0, -90.0, 135.0, -135.0, 180.0)
 
 
 @dataclass(frozen=True)
@@ -608,17 +614,38 @@ def generate_scene(
     return scene_dir
 
 
+def view_yaws(obj: CatalogueObject) -> tuple[float, ...]:
+    """The yaws (degrees) of ``obj``'s training views.
+
+    Boxes and cards face the camera within ±35° in the scenes, so front, ±30° and back
+    (:data:`VIEW_YAWS`) cover them; a cylinder stands at any yaw and its wrapped photo is
+    recognised only near the middle of a view, so it gets eight views, 45° apart
+    (:data:`CYLINDER_VIEW_YAWS`).
+
+    Examples
+    --------
+    >>> len(view_yaws(CATALOGUE[0])), len(view_yaws(CATALOGUE[3]))
+    (4, 8)
+    """
+    return CYLINDER_VIEW_YAWS if obj.shape == "cylinder" else VIEW_YAWS
+
+
 def render_training_views(
     obj: CatalogueObject,
     out_dir: str | PathLike[str],
     *,
     image_size: tuple[int, int] = (640, 480),
     hfov_deg: float = 60.0,
-    yaws: Sequence[float] = VIEW_YAWS,
+    yaws: Sequence[float] | None = None,
     distance: float = 0.5,
 ) -> list[Path]:
-    """Render ``obj`` alone from a few viewpoints (front, ±30°, back by default) about
-    ``distance`` metres away, writing ``view_XX.png`` and ``view_XX_mask.png``."""
+    """Render ``obj`` alone from a few viewpoints about ``distance`` metres away, writing
+    ``view_XX.png`` and ``view_XX_mask.png``.
+
+    ``yaws`` defaults to :func:`view_yaws` (front, ±30° and back for boxes and cards; every
+    45° for cylinders)."""
+    if yaws is None:
+        yaws = view_yaws(obj)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     cam_h = obj.size[2] / 2 + 0.15
@@ -756,7 +783,7 @@ def generate_dataset(
     if views:
         for obj in CATALOGUE:
             d = out / "objects" / obj.label
-            if not (d / f"view_{len(VIEW_YAWS) - 1:02d}_mask.png").exists():
+            if not (d / f"view_{len(view_yaws(obj)) - 1:02d}_mask.png").exists():
                 render_training_views(obj, d, image_size=image_size, hfov_deg=hfov_deg)
             done += 1
             if progress is not None:

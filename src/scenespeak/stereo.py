@@ -692,6 +692,7 @@ def dense_disparity(
     block_size: int = 3,
     roi: tuple[int, int, int, int] | None = None,
     uniqueness: int = 10,
+    pad: int | None = None,
 ) -> DenseDisparity:
     """Dense disparity of the rectified pair with OpenCV StereoSGBM (3-way mode).
 
@@ -713,6 +714,9 @@ def dense_disparity(
         for one small object.
     uniqueness : int
         SGBM's uniquenessRatio (percent margin of the best cost over the second best).
+    pad : int, optional
+        With ``roi``: pixels of context computed around it (and then dropped), so that SGBM's
+        path costs have settled at the region's border (default ``block_size // 2 + 2``).
 
     Returns
     -------
@@ -738,7 +742,7 @@ def dense_disparity(
         return DenseDisparity(out, rect, mn, num)
     # a crop: rows y0..y1; columns from far enough left that every disparity can be searched
     xa = max(0, x0 - max(0, mn + num))
-    pad = block_size // 2 + 2
+    pad = block_size // 2 + 2 if pad is None else max(0, int(pad))
     ya, yb = max(0, y0 - pad), min(h, y1 + pad)
     xb = min(w, x1 + pad)
     cl = np.ascontiguousarray(gl[ya:yb, xa:xb])
@@ -798,8 +802,16 @@ def region_points(
     if m.shape != (h, w):
         raise ImageError("region mask", f"has shape {m.shape} but the images are {w}x{h} (w x h)")
     if rect.maps_left is None:
-        rmask = m
-        ys, xs = np.nonzero(rmask & np.isfinite(disp))
+        rows = np.flatnonzero(m.any(axis=1))
+        cols = np.flatnonzero(m.any(axis=0))
+        if len(rows):  # within the mask's bounding box; row-major as np.nonzero(m) gives
+            r0, c0 = int(rows[0]), int(cols[0])
+            ys, xs = np.nonzero(m[r0 : int(rows[-1]) + 1, c0 : int(cols[-1]) + 1])
+            ys, xs = ys + r0, xs + c0
+        else:
+            ys = xs = np.zeros(0, dtype=np.intp)
+        ok = np.isfinite(disp[ys, xs])
+        ys, xs = ys[ok], xs[ok]
         src_x, src_y = xs.astype(np.float64), ys.astype(np.float64)
     else:
         mx, my = rect.maps_left
@@ -826,6 +838,28 @@ def region_points(
 # one call
 
 
+def _dense_box(
+    m: StereoMatches,
+    rect: Rectification,
+    extra: tuple[float, float, float, float] | None,
+    margin: int,
+) -> tuple[int, int, int, int]:
+    """Bounding box (rectified pixels) of the matches to verify and of an input-image region."""
+    w, h = rect.rig.image_size
+    pts = [m.left_rect]
+    if extra is not None:
+        x0, y0, x1, y1 = (float(v) for v in extra)
+        corners = np.array([[x0, y0], [x1, y0], [x1, y1], [x0, y1]], dtype=np.float64)
+        pts.append(rect.rectify_points(corners, "left") if rect.needs_resampling else corners)
+    xy = np.concatenate(pts)
+    xy = xy[np.all(np.isfinite(xy), axis=1)]
+    if len(xy) == 0:
+        return (0, 0, 0, 0)
+    lo = np.floor(xy.min(axis=0)).astype(int) - margin
+    hi = np.ceil(xy.max(axis=0)).astype(int) + margin + 1
+    return (max(0, lo[0]), max(0, lo[1]), min(w, hi[0]), min(h, hi[1]))
+
+
 def stereo_points(
     left_image: NDArray[np.generic],
     right_image: NDArray[np.generic],
@@ -841,6 +875,8 @@ def stereo_points(
     left_name: str = "left image",
     right_name: str = "right image",
     min_points: int = 0,
+    dense_crop: bool = False,
+    dense_roi: tuple[float, float, float, float] | None = None,
 ) -> StereoResult:
     """Match and triangulate a stereo pair in one call (SIFT runs once per image).
 
@@ -868,6 +904,14 @@ def stereo_points(
     min_points : int
         Raise :class:`~scenespeak.errors.ImageError` when fewer points are found (0: return
         an empty result instead; a textureless pair gives no points).
+    dense_crop : bool
+        Compute the dense map (``verify``) only over the bounding box of the keypoints it has
+        to check (plus ``dense_roi``) instead of the whole image: the same checks for a
+        fraction of the cost when the scene does not fill the image (about 2.5× faster on the
+        rendered table scenes); elsewhere the map is NaN.
+    dense_roi : (x0, y0, x1, y1), optional
+        With ``dense_crop``, a region of the INPUT left image (pixels) the dense map must also
+        cover, e.g. the recognised objects' outlines for :func:`region_points`.
 
     Returns
     -------
@@ -891,8 +935,11 @@ def stereo_points(
         if verify:
             # the disparity range for SGBM comes from the strict in-band matches
             strict = _select(cand, fl, rect, search="band", ratio=ratio, **kw)
-            dense = dense_disparity(gl, gr, rect, keypoint_disparities=strict.disparity)
             m = _select(cand, fl, rect, search="band", ratio=band_ratio, **kw)
+            roi = _dense_box(m, rect, dense_roi, margin=5) if dense_crop else None
+            dense = dense_disparity(
+                gl, gr, rect, keypoint_disparities=strict.disparity, roi=roi, pad=16
+            )
             m = m.subset(_verify_dense(m, dense, 0.75, 1.0, 5))
         else:
             m = _select(cand, fl, rect, search="global", ratio=ratio, **kw)
