@@ -78,12 +78,12 @@ class CatalogueObject:
 
 #: The fixed catalogue: sizes of real household objects.
 CATALOGUE: tuple[CatalogueObject, ...] = (
-    CatalogueObject("box", "box", (0.19, 0.07, 0.27), "astronaut"),  # cereal box
+    CatalogueObject("box", "box", (0.19, 0.07, 0.27), "page"),  # cereal box, printed text
     CatalogueObject("book", "box", (0.16, 0.03, 0.23), "coffee"),  # upright book
     CatalogueObject("card", "card", (0.18, 0.012, 0.13), "chelsea"),  # photo card / frame
-    CatalogueObject("can", "cylinder", (0.066, 0.066, 0.122), "rocket"),  # drink can
+    CatalogueObject("can", "cylinder", (0.066, 0.066, 0.122), "astronaut"),  # drink can
     CatalogueObject("mug", "cylinder", (0.085, 0.085, 0.095), "immunohistochemistry"),
-    CatalogueObject("tin", "cylinder", (0.10, 0.10, 0.16), "hubble_deep_field"),  # coffee tin
+    CatalogueObject("tin", "cylinder", (0.10, 0.10, 0.16), "coins"),  # coin tin
     CatalogueObject("shoebox", "box", (0.32, 0.19, 0.11), "camera"),
 )
 
