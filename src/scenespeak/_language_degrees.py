@@ -28,6 +28,7 @@ shrinks by the factor ``1 - tau / f`` (about 3 % for 180 bins), so a spike would
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -87,6 +88,46 @@ def _cancel_side(fav: NDArray[np.float64], dist: NDArray[np.float64], moment: fl
     return cancelled
 
 
+@dataclass(frozen=True)
+class _Constants:
+    """Index arrays and weights of :func:`direction_degree` for one number of bins."""
+
+    phis: NDArray[np.intp]
+    neg_phis: NDArray[np.intp]
+    dist: NDArray[np.float64]
+    cphi: NDArray[np.intp]
+    neg_cphi: NDArray[np.intp]
+    arm: NDArray[np.float64]
+    phi: NDArray[np.float64]
+    weight: NDArray[np.float64]
+    weight_sum: np.float64
+
+
+@functools.lru_cache(maxsize=8)
+def _constants(nbins: int) -> _Constants:
+    """The arrays :func:`direction_degree` needs for ``nbins`` bins (computed once, read-only)."""
+    n = nbins // 4
+    bin_rad = 2.0 * np.pi / nbins
+    phis = np.arange(n - 1, -1, -1)
+    cphi = np.arange(n, 2 * n)
+    phi = np.arange(-(n - 1), n) * bin_rad
+    absdeg = np.degrees(np.abs(phi))
+    weight = np.clip((TAU_ZERO_DEG - absdeg) / (TAU_ZERO_DEG - TAU_FLAT_DEG), 0.0, 1.0)
+    arrays = {
+        "phis": phis,
+        "neg_phis": (-phis) % nbins,
+        "dist": (n - phis).astype(np.float64),
+        "cphi": cphi,
+        "neg_cphi": (-cphi) % nbins,
+        "arm": (cphi - n).astype(np.float64),
+        "phi": phi,
+        "weight": weight,
+    }
+    for a in arrays.values():
+        a.setflags(write=False)
+    return _Constants(**arrays, weight_sum=weight.sum())
+
+
 def direction_degree(h: NDArray[np.float64], index: int) -> DirectionDegree:
     """Degree of truth that the argument lies in the direction of bin ``index``.
 
@@ -109,21 +150,21 @@ def direction_degree(h: NDArray[np.float64], index: int) -> DirectionDegree:
     """
     nbins = h.size
     n = nbins // 4
-    g = np.roll(h, -index).astype(np.float64)
-    bin_rad = 2.0 * np.pi / nbins
+    c = _constants(nbins)
+    # np.roll(h, -index), without its general-purpose overhead (the same values).
+    k = index % nbins if nbins else 0
+    g = np.concatenate([h[k:], h[:k]]).astype(np.float64)
     # Favourable bins on each side, ordered from the pivot inwards: phi = n-1, ..., 1, 0(half).
-    phis = np.arange(n - 1, -1, -1)
-    dist = (n - phis).astype(np.float64)
-    fav_pos = g[phis].copy()
-    fav_neg = g[(-phis) % nbins].copy()
+    dist = c.dist
+    fav_pos = g[c.phis]
+    fav_neg = g[c.neg_phis]
     fav_pos[-1] *= 0.5
     fav_neg[-1] *= 0.5
     # Contrary bins on each side: |phi| = n .. 2n-1, plus the opposite bin (half each).
-    cphi = np.arange(n, 2 * n)
-    con_pos = g[cphi]
-    con_neg = g[(-cphi) % nbins]
+    con_pos = g[c.cphi]
+    con_neg = g[c.neg_cphi]
     opposite = 0.5 * g[2 * n]
-    arm = (cphi - n).astype(np.float64)
+    arm = c.arm
     m_pos = float(con_pos @ arm) + opposite * n
     m_neg = float(con_neg @ arm) + opposite * n
     contrary = float(con_pos.sum() + con_neg.sum()) + 2.0 * opposite
@@ -132,14 +173,13 @@ def direction_degree(h: NDArray[np.float64], index: int) -> DirectionDegree:
 
     # Effective forces as one array over phi = -(n-1) .. (n-1), the bin at 0 whole again.
     eff = np.concatenate([fav_neg[:-1], [fav_pos[-1] + fav_neg[-1]], fav_pos[::-1][1:]])
-    phi = np.arange(-(n - 1), n) * bin_rad
+    phi = c.phi
     total = float(eff.sum())
     scale = max(total + contrary, 1e-300)
     if total <= 1e-12 * scale:
         return DirectionDegree(0.0, 0.0, max(total, 0.0), contrary)
-    absdeg = np.degrees(np.abs(phi))
-    weight = np.clip((TAU_ZERO_DEG - absdeg) / (TAU_ZERO_DEG - TAU_FLAT_DEG), 0.0, 1.0)
-    tau = float(weight @ eff / weight.sum())
+    weight = c.weight
+    tau = float(weight @ eff / c.weight_sum)
     above = np.maximum(eff - tau, 0.0)
     mass = float(above.sum())
     theta = float(above @ phi / mass) if mass > 0.0 else float(eff @ phi / total)

@@ -49,9 +49,11 @@ unless they are inliers of an accepted detection.
 from __future__ import annotations
 
 import contextlib
+import functools
 import itertools
 import math
 import sqlite3
+import sys
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
@@ -649,7 +651,7 @@ class IVFIndex:
                 kk = min(k, hi - lo)
                 if kk < hi - lo:
                     cols = np.argpartition(d, kk - 1, axis=1)[:, :kk]
-                    pair_d[a:b, :kk] = np.take_along_axis(d, cols, axis=1)
+                    pair_d[a:b, :kk] = d[np.arange(b - a)[:, None], cols]
                 else:
                     cols = np.broadcast_to(np.arange(hi - lo), d.shape)
                     pair_d[a:b, :kk] = d
@@ -802,12 +804,26 @@ def _have_faiss() -> bool:
 
 
 def _single_threaded_blas() -> contextlib.AbstractContextManager[object]:
-    """Limit BLAS to one thread for the duration of a ``with`` block (if threadpoolctl is here)."""
-    try:
-        from threadpoolctl import threadpool_limits
-    except ImportError:  # pragma: no cover - scikit-learn depends on it
+    """Limit BLAS to one thread for the duration of a ``with`` block (if threadpoolctl is here).
+
+    Finding the loaded BLAS libraries takes threadpoolctl ~2 ms per call (it walks the
+    process's shared objects); the controller is kept and made again only when modules were
+    imported since (a new extension module may bring its own BLAS).
+    """
+    controller = _blas_controller(len(sys.modules))
+    if controller is None:  # pragma: no cover - scikit-learn depends on threadpoolctl
         return contextlib.nullcontext()
-    return threadpool_limits(limits=1, user_api="blas")
+    return controller.limit(limits=1, user_api="blas")
+
+
+@functools.lru_cache(maxsize=1)
+def _blas_controller(_n_modules: int) -> Any:
+    """A ``threadpoolctl.ThreadpoolController`` (cached per number of imported modules)."""
+    try:
+        from threadpoolctl import ThreadpoolController
+    except ImportError:  # pragma: no cover - scikit-learn depends on it
+        return None
+    return ThreadpoolController()
 
 
 def _auto_kind(n: int, exact_below: int = 4096) -> IndexKind:
@@ -996,21 +1012,27 @@ def _extract_view(
 
 def _local_jacobians(
     h: NDArray[np.float64], pts: NDArray[np.float64]
-) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """Per-point 2×2 Jacobians of the homography (as (n, 4): j00, j01, j10, j11) and w."""
+) -> tuple[tuple[NDArray[np.float64], ...], NDArray[np.float64]]:
+    """Per-point 2×2 Jacobians of the homography (j00, j01, j10, j11, each (n,)) and w."""
     x, y = pts[:, 0], pts[:, 1]
     u = h[0, 0] * x + h[0, 1] * y + h[0, 2]
     v = h[1, 0] * x + h[1, 1] * y + h[1, 2]
-    w = h[2, 0] * x + h[2, 1] * y + h[2, 2]
-    j00 = (h[0, 0] * w - u * h[2, 0]) / w**2
-    j01 = (h[0, 1] * w - u * h[2, 1]) / w**2
-    j10 = (h[1, 0] * w - v * h[2, 0]) / w**2
-    j11 = (h[1, 1] * w - v * h[2, 1]) / w**2
-    return np.stack([j00, j01, j10, j11], axis=1), w
+    w = _w_of(h, pts)
+    w2 = w**2
+    j00 = (h[0, 0] * w - u * h[2, 0]) / w2
+    j01 = (h[0, 1] * w - u * h[2, 1]) / w2
+    j10 = (h[1, 0] * w - v * h[2, 0]) / w2
+    j11 = (h[1, 1] * w - v * h[2, 1]) / w2
+    return (j00, j01, j10, j11), w
+
+
+def _w_of(h: NDArray[np.float64], pts: NDArray[np.float64]) -> NDArray[np.float64]:
+    """The homogeneous coordinate ``w`` of each point mapped by ``h``."""
+    return h[2, 0] * pts[:, 0] + h[2, 1] * pts[:, 1] + h[2, 2]
 
 
 def _apply_h(h: NDArray[np.float64], pts: NDArray[np.float64]) -> NDArray[np.float64]:
-    ph = np.c_[pts, np.ones(len(pts))] @ h.T
+    ph = np.hstack([pts, np.ones((len(pts), 1))]) @ h.T
     return ph[:, :2] / ph[:, 2:3]
 
 
@@ -1034,16 +1056,16 @@ def _consistent(
     max_angle_deg: float,
 ) -> NDArray[np.bool_]:
     """Matches that agree with ``h`` in position, keypoint scale and orientation."""
-    jac, w = _local_jacobians(h, t_xy)
+    (j00, j01, j10, j11), w = _local_jacobians(h, t_xy)
     ok = w > 0
     proj = _apply_h(h, t_xy)
     ok &= np.linalg.norm(proj - q_xy, axis=1) <= threshold
-    det = jac[:, 0] * jac[:, 3] - jac[:, 1] * jac[:, 2]
+    det = j00 * j11 - j01 * j10
     with np.errstate(invalid="ignore", divide="ignore"):
         scale = np.sqrt(np.abs(det))
         ratio = (q_size / np.maximum(t_size, 1e-6)) / scale
         ok &= np.abs(np.log(ratio)) <= math.log(max_scale_ratio)
-    rot = np.degrees(np.arctan2(jac[:, 2] - jac[:, 1], jac[:, 0] + jac[:, 3]))
+    rot = np.degrees(np.arctan2(j10 - j01, j00 + j11))
     dang = (q_angle.astype(np.float64) - t_angle - rot + 180.0) % 360.0 - 180.0
     ok &= np.abs(dang) <= max_angle_deg
     return ok & np.isfinite(ratio)
@@ -1055,13 +1077,11 @@ def _plausible(
     """Reject homographies that fold, mirror, or shrink/stretch the view beyond belief."""
     if not np.all(np.isfinite(h)):
         return False
-    pts = np.vstack([outline.astype(np.float64), t_xy])
-    _, w = _local_jacobians(h, pts)
-    if np.any(w <= 0):
+    if np.any(_w_of(h, outline.astype(np.float64)) <= 0) or np.any(_w_of(h, t_xy) <= 0):
         return False
     centre = t_xy.mean(axis=0, keepdims=True)
     jc, _ = _local_jacobians(h, centre)
-    a = jc[0].reshape(2, 2)
+    a = np.array([[jc[0][0], jc[1][0]], [jc[2][0], jc[3][0]]])
     if np.linalg.det(a) <= 0:
         return False
     sv = np.linalg.svd(a, compute_uv=False)

@@ -37,7 +37,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable, Iterator, Mapping
 from concurrent.futures import ThreadPoolExecutor
-from contextlib import AbstractContextManager, contextmanager, nullcontext
+from contextlib import AbstractContextManager, contextmanager
 from dataclasses import dataclass, field
 from os import PathLike
 from pathlib import Path
@@ -436,11 +436,9 @@ def describe_scene(
 
 def _single_threaded_blas() -> AbstractContextManager[object]:
     """Limit BLAS to one thread for a ``with`` block (threadpoolctl, if installed)."""
-    try:
-        from threadpoolctl import threadpool_limits
-    except ImportError:  # pragma: no cover - scikit-learn depends on it
-        return nullcontext()
-    return threadpool_limits(limits=1, user_api="blas")
+    from scenespeak.database import _single_threaded_blas as limit
+
+    return limit()
 
 
 def _after_sift(
