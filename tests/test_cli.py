@@ -17,48 +17,21 @@ from pathlib import Path
 import cv2
 import numpy as np
 import pytest
-from skimage import data, transform
 
+from cardscene import BASELINE, FOCAL, HFOV, H, W, card_pair, photo, write_rgb
 from scenespeak.cli import main
 
-W, H, BASELINE, HFOV = 640, 480, 0.12, 60.0
-FOCAL = (W / 2) / np.tan(np.radians(HFOV / 2))
 #: label → (x, Z, width) in metres: a card of that photo at that place.
 CARDS = {"astronaut": (-0.25, 1.2, 0.22), "coffee": (0.22, 1.0, 0.2)}
 
-
-def _photo(name: str, size: tuple[int, int]) -> np.ndarray:
-    img = getattr(data, name)()
-    img = np.stack([img] * 3, -1) if img.ndim == 2 else img[..., :3]
-    return (transform.resize(img, size, anti_aliasing=True) * 255).astype(np.uint8)
-
-
-def _write(path: Path, rgb: np.ndarray) -> Path:
-    cv2.imwrite(str(path), cv2.cvtColor(rgb, cv2.COLOR_RGB2BGR))
-    return path
+_photo, _write = photo, write_rgb
 
 
 @pytest.fixture(scope="module")
 def scene(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Path]:
     """Files of one synthetic stereo scene, its calibration, training images and a database."""
     root = tmp_path_factory.mktemp("cli_scene")
-    rng = np.random.default_rng(0)
-    wall = cv2.resize(
-        rng.integers(0, 255, (H // 8, (W + 200) // 8, 3)).astype(np.uint8),
-        (W + 200, H),
-        interpolation=cv2.INTER_LINEAR,
-    )
-    d_wall = round(FOCAL * BASELINE / 4.0)
-    left = wall[:, 100 : 100 + W].copy()
-    right = wall[:, 100 + d_wall : 100 + d_wall + W].copy()
-    for name, (x, z, width) in sorted(CARDS.items(), key=lambda kv: -kv[1][1]):
-        wpx = round(FOCAL * width / z)
-        u = round(W / 2 + FOCAL * x / z - wpx / 2)
-        v = H // 2 - wpx // 2
-        d = round(FOCAL * BASELINE / z)
-        card = _photo(name, (wpx, wpx))
-        left[v : v + wpx, u : u + wpx] = card
-        right[v : v + wpx, u - d : u - d + wpx] = card
+    left, right = card_pair(CARDS)
     files = {
         "left": _write(root / "left.png", left),
         "right": _write(root / "right.png", right),

@@ -11,8 +11,8 @@ from pathlib import Path
 import cv2
 import numpy as np
 import pytest
-from skimage import data, transform
 
+from cardscene import BASELINE, HFOV, H, W, card_pair, photo
 from scenespeak.errors import InputError
 from scenespeak.evaluation import (
     EvaluationResult,
@@ -130,8 +130,6 @@ def test_an_empty_result_prints_dashes() -> None:
 
 # --- the whole experiment on a hand-labelled card dataset ------------------------------------
 
-W, H, BASELINE, HFOV = 640, 480, 0.12, 60.0
-FOCAL = (W / 2) / np.tan(np.radians(HFOV / 2))
 CARDS = {"astronaut": (-0.25, 1.2, 0.2), "chelsea": (0.22, 1.0, 0.2), "coffee": (0.0, 1.8, 0.25)}
 LAYOUT = [  # argument, referent, primary from the layout, ambiguous
     ("astronaut", "chelsea", "left", False),
@@ -143,10 +141,7 @@ LAYOUT = [  # argument, referent, primary from the layout, ambiguous
 ]
 
 
-def _photo(name: str, size: int) -> np.ndarray:
-    img = getattr(data, name)()
-    img = np.stack([img] * 3, -1) if img.ndim == 2 else img[..., :3]
-    return (transform.resize(img, (size, size), anti_aliasing=True) * 255).astype(np.uint8)
+_photo = photo
 
 
 def _write_rgb(path: Path, img: np.ndarray) -> None:
@@ -154,20 +149,7 @@ def _write_rgb(path: Path, img: np.ndarray) -> None:
 
 
 def _card_pair() -> tuple[np.ndarray, np.ndarray]:
-    rng = np.random.default_rng(0)
-    wall = cv2.resize(
-        rng.integers(0, 255, (H // 8, (W + 200) // 8, 3)).astype(np.uint8), (W + 200, H)
-    )
-    shift = round(FOCAL * BASELINE / 4.0)
-    left, right = wall[:, 100 : 100 + W].copy(), wall[:, 100 + shift : 100 + shift + W].copy()
-    for name, (x, z, width) in sorted(CARDS.items(), key=lambda kv: -kv[1][1]):
-        size = round(FOCAL * width / z)
-        u, v = round(W / 2 + FOCAL * x / z - size / 2), H // 2 - size // 2
-        d = round(FOCAL * BASELINE / z)
-        card = _photo(name, size)
-        left[v : v + size, u : u + size] = card
-        right[v : v + size, u - d : u - d + size] = card
-    return left, right
+    return card_pair(CARDS)
 
 
 @pytest.fixture(scope="module")

@@ -11,15 +11,16 @@ import base64
 import re
 from pathlib import Path
 
-import cv2
 import numpy as np
 import pytest
 from matplotlib.colors import to_rgba
 from matplotlib.figure import Figure
 from matplotlib.image import imread
 from scipy.spatial import ConvexHull
-from skimage import data, transform
+from skimage import data
 
+from cardscene import BASELINE as CARD_BASELINE
+from cardscene import HFOV, H, W, card_pair, photo
 from scenespeak.errors import InputError
 from scenespeak.figures import (
     UNLABELLED_COLOR,
@@ -186,15 +187,7 @@ def test_histograms_polar_and_linear(tmp_path: Path) -> None:
 
 # --- a real SceneDescription: photo cards before a textured wall ------------------------------
 
-W, H, CARD_BASELINE, HFOV = 640, 480, 0.12, 60.0
-CARD_FOCAL = (W / 2) / np.tan(np.radians(HFOV / 2))
 CARDS = {"astronaut": (-0.25, 1.2, 0.2), "chelsea": (0.22, 1.0, 0.2), "coffee": (0.0, 1.8, 0.25)}
-
-
-def _photo(name: str, size: int) -> np.ndarray:
-    img = getattr(data, name)()
-    img = np.stack([img] * 3, -1) if img.ndim == 2 else img[..., :3]
-    return (transform.resize(img, (size, size), anti_aliasing=True) * 255).astype(np.uint8)
 
 
 @pytest.fixture(scope="module")
@@ -203,23 +196,11 @@ def description(tmp_path_factory: pytest.TempPathFactory) -> object:
     from scenespeak.database import ObjectDatabase
     from scenespeak.pipeline import describe_scene
 
-    rng = np.random.default_rng(0)
-    wall = cv2.resize(
-        rng.integers(0, 255, (H // 8, (W + 200) // 8, 3)).astype(np.uint8), (W + 200, H)
-    )
-    shift = round(CARD_FOCAL * CARD_BASELINE / 4.0)
-    left, right = wall[:, 100 : 100 + W].copy(), wall[:, 100 + shift : 100 + shift + W].copy()
-    for name, (x, z, width) in sorted(CARDS.items(), key=lambda kv: -kv[1][1]):
-        size = round(CARD_FOCAL * width / z)
-        u, v = round(W / 2 + CARD_FOCAL * x / z - size / 2), H // 2 - size // 2
-        d = round(CARD_FOCAL * CARD_BASELINE / z)
-        card = _photo(name, size)
-        left[v : v + size, u : u + size] = card
-        right[v : v + size, u - d : u - d + size] = card
+    left, right = card_pair(CARDS)
     path = tmp_path_factory.mktemp("cards") / "objects.db"
     with ObjectDatabase.create(path) as db:
         for name in CARDS:
-            db.add_object(name, [_photo(name, 240)])
+            db.add_object(name, [photo(name, 240)])
     rig = rig_from_short(CARD_BASELINE, HFOV, (W, H))
     with ObjectDatabase.open(path, readonly=True) as db:
         return describe_scene(left, right, rig, db, unknown=False)

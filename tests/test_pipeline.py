@@ -18,46 +18,15 @@ from typing import Any
 import cv2
 import numpy as np
 import pytest
-from skimage import data, transform
 
+from cardscene import BASELINE, HFOV, H, W, card_pair, photo
 from scenespeak.calibration import rig_from_short
 from scenespeak.database import ObjectDatabase
 from scenespeak.errors import DatabaseError, ImageError
 from scenespeak.objects import SceneObject, project_to_plane
 from scenespeak.pipeline import SceneDescription, describe_files, describe_scene
 
-W, H, BASELINE, HFOV = 640, 480, 0.12, 60.0
-FOCAL = (W / 2) / np.tan(np.radians(HFOV / 2))
-
-
-def _photo(name: str, size: tuple[int, int]) -> np.ndarray:
-    img = getattr(data, name)()
-    img = np.stack([img] * 3, -1) if img.ndim == 2 else img[..., :3]
-    return (transform.resize(img, size, anti_aliasing=True) * 255).astype(np.uint8)
-
-
-def card_pair(
-    cards: dict[str, tuple[float, float, float]], seed: int = 0
-) -> tuple[np.ndarray, np.ndarray]:
-    """Left/right images of photo cards ``label → (x, Z, width)`` before a wall 4 m away."""
-    rng = np.random.default_rng(seed)
-    wall = cv2.resize(
-        rng.integers(0, 255, (H // 8, (W + 200) // 8, 3)).astype(np.uint8),
-        (W + 200, H),
-        interpolation=cv2.INTER_LINEAR,
-    )
-    d_wall = round(FOCAL * BASELINE / 4.0)
-    left = wall[:, 100 : 100 + W].copy()
-    right = wall[:, 100 + d_wall : 100 + d_wall + W].copy()
-    for name, (x, z, width) in sorted(cards.items(), key=lambda kv: -kv[1][1]):
-        wpx = round(FOCAL * width / z)
-        u = round(W / 2 + FOCAL * x / z - wpx / 2)
-        v = H // 2 - wpx // 2
-        d = round(FOCAL * BASELINE / z)
-        card = _photo(name, (wpx, wpx))
-        left[v : v + wpx, u : u + wpx] = card
-        right[v : v + wpx, u - d : u - d + wpx] = card
-    return left, right
+_photo = photo
 
 
 @pytest.fixture(scope="module")
