@@ -21,12 +21,12 @@ stage's result in a frozen :class:`SceneDescription`:
    unordered pair's histograms are computed once (``language.pair_histograms``) and read both
    ways (``language.relations_of_pair``).
 
-Speed (``benchmarks/bench_pipeline.py --only timing``, 640×480 rendered pair, shared 2-core
-machine): the whole call takes about 1.3× the two SIFT extractions run one after the other and
-about 1.6–1.75× the two run in two threads as here; labelling, stereo, objects and relations
-take roughly 16 + 16 + 6 + 7 ms. Stages 2–5 run with BLAS limited to one thread (their
-matrices are small; a second OpenBLAS thread made a 200 × 128 × 200 product 150× slower when
-the other core was busy).
+Speed (``benchmarks/bench_pipeline.py --only timing``, 640×480 rendered pair with 5 objects,
+shared 2-core machine): the whole call takes about 1.2–1.4× the two SIFT extractions run one
+after the other and about 1.7–2.1× the two run in two threads as here; labelling, stereo,
+objects and relations take roughly 21 + 16 + 10 + 13 ms (README, "Speed"). Stages 2–5 run
+with BLAS limited to one thread (their matrices are small; a second OpenBLAS thread made a
+200 × 128 × 200 product 150× slower when the other core was busy).
 
 :meth:`SceneDescription.to_dict` gives exactly the JSON of ``interfaces.md`` (plus extra
 fields); :meth:`SceneDescription.to_text` the sentences for people.
