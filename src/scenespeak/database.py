@@ -61,7 +61,7 @@ from datetime import UTC, datetime
 from os import PathLike
 from pathlib import Path
 from types import TracebackType
-from typing import Any, Literal, Protocol
+from typing import Any, Literal, Protocol, Self
 
 import cv2
 import numpy as np
@@ -455,7 +455,42 @@ def _quantise(
     return centroids, assign
 
 
-class IVFIndex:
+class _IndexBuilder:
+    """Construction shared by the inverted-file indexes: from one array or from chunks.
+
+    Subclasses implement ``_build(chunks, n, **options)``; the options are the keyword
+    parameters documented on each subclass.
+    """
+
+    def __init__(self, descriptors: NDArray[np.uint8], **options: Any) -> None:
+        data = np.ascontiguousarray(descriptors, dtype=np.uint8)
+        self._build(lambda: iter([data]), data.shape[0], **options)
+
+    def _build(
+        self, chunks: Callable[[], Iterator[NDArray[np.uint8]]], n: int, **options: Any
+    ) -> None:
+        raise NotImplementedError
+
+    @classmethod
+    def from_chunks(
+        cls,
+        chunks: Callable[[], Iterator[NDArray[np.uint8]]],
+        total: int,
+        **options: Any,
+    ) -> Self:
+        """Build from descriptors read in consecutive chunks, without holding two copies.
+
+        ``chunks()`` must yield the same ``(n_i, 128)`` blocks, in the same order, each time it
+        is called; it is called up to three times (training sample, cell assignment, filling
+        the lists), so that the peak memory is one ``uint8`` copy plus a training sample.
+        ``options`` are those of the constructor.
+        """
+        index = cls.__new__(cls)
+        index._build(chunks, total, **options)
+        return index
+
+
+class IVFIndex(_IndexBuilder):
     """Inverted-file index in NumPy: k-means coarse quantiser, ``uint8`` lists, float32 GEMM.
 
     The descriptors are stored once, grouped by coarse cell (``uint8``, 128 B each). A query
@@ -481,51 +516,6 @@ class IVFIndex:
         Threads scanning the cells in a search (default 1; 2 can help on an idle 2-core
         machine, and did not on the shared one it was measured on).
     """
-
-    def __init__(
-        self,
-        descriptors: NDArray[np.uint8],
-        *,
-        nlist: int | None = None,
-        nprobe: int = 4,
-        train_size: int = 65536,
-        iters: int = 10,
-        seed: int = 0,
-        centroids: NDArray[np.float32] | None = None,
-        cells: NDArray[np.integer] | None = None,
-        threads: int | None = None,
-    ) -> None:
-        data = np.ascontiguousarray(descriptors, dtype=np.uint8)
-        self._build(
-            lambda: iter([data]),
-            data.shape[0],
-            nlist=nlist,
-            nprobe=nprobe,
-            train_size=train_size,
-            iters=iters,
-            seed=seed,
-            centroids=centroids,
-            cells=cells,
-            threads=threads,
-        )
-
-    @classmethod
-    def from_chunks(
-        cls,
-        chunks: Callable[[], Iterator[NDArray[np.uint8]]],
-        total: int,
-        **options: Any,
-    ) -> IVFIndex:
-        """Build from descriptors read in consecutive chunks, without holding two copies.
-
-        ``chunks()`` must yield the same ``(n_i, 128)`` blocks, in the same order, each time it
-        is called; it is called up to three times (training sample, cell assignment, filling
-        the lists), so that the peak memory is one ``uint8`` copy plus a training sample.
-        ``options`` are those of the constructor.
-        """
-        index = cls.__new__(cls)
-        index._build(chunks, total, **options)
-        return index
 
     def _build(
         self,
@@ -677,50 +667,13 @@ class IVFIndex:
         return out_d, out_i
 
 
-class FaissIndex:
+class FaissIndex(_IndexBuilder):
     """FAISS ``IndexIVFScalarQuantizer`` with ``QT_8bit_direct``: exact ``uint8`` storage.
 
     Only available when the optional ``faiss-cpu`` package is installed. Uses the same coarse
     quantiser as :class:`IVFIndex` (so the cache in the database file serves both); the
     descriptors are stored as 128-byte codes (no residuals), searched by FAISS in C++.
     """
-
-    def __init__(
-        self,
-        descriptors: NDArray[np.uint8],
-        *,
-        nlist: int | None = None,
-        nprobe: int = 4,
-        train_size: int = 65536,
-        iters: int = 10,
-        seed: int = 0,
-        centroids: NDArray[np.float32] | None = None,
-        cells: NDArray[np.integer] | None = None,
-    ) -> None:
-        data = np.ascontiguousarray(descriptors, dtype=np.uint8)
-        self._build(
-            lambda: iter([data]),
-            data.shape[0],
-            nlist=nlist,
-            nprobe=nprobe,
-            train_size=train_size,
-            iters=iters,
-            seed=seed,
-            centroids=centroids,
-            cells=cells,
-        )
-
-    @classmethod
-    def from_chunks(
-        cls,
-        chunks: Callable[[], Iterator[NDArray[np.uint8]]],
-        total: int,
-        **options: Any,
-    ) -> FaissIndex:
-        """Build from descriptors read in consecutive chunks (see :meth:`IVFIndex.from_chunks`)."""
-        index = cls.__new__(cls)
-        index._build(chunks, total, **options)
-        return index
 
     def _build(
         self,
