@@ -466,10 +466,49 @@ class _IndexBuilder:
         data = np.ascontiguousarray(descriptors, dtype=np.uint8)
         self._build(lambda: iter([data]), data.shape[0], **options)
 
+    centroids: NDArray[np.float32]
+    nprobe: int
+
     def _build(
-        self, chunks: Callable[[], Iterator[NDArray[np.uint8]]], n: int, **options: Any
+        self,
+        chunks: Callable[[], Iterator[NDArray[np.uint8]]],
+        n: int,
+        *,
+        nlist: int | None = None,
+        nprobe: int = 4,
+        train_size: int = 65536,
+        iters: int = 10,
+        seed: int = 0,
+        centroids: NDArray[np.float32] | None = None,
+        cells: NDArray[np.integer] | None = None,
+        **extra: Any,
     ) -> None:
+        self.centroids, assign = _quantise(
+            chunks,
+            n,
+            nlist=nlist,
+            train_size=train_size,
+            iters=iters,
+            seed=seed,
+            centroids=centroids,
+            cells=cells,
+        )
+        self.nprobe = nprobe
+        self._fill(chunks, n, assign, **extra)
+
+    def _fill(
+        self,
+        chunks: Callable[[], Iterator[NDArray[np.uint8]]],
+        n: int,
+        assign: NDArray[np.intp],
+        **extra: Any,
+    ) -> None:
+        """Store the descriptors under their coarse cells ``assign`` (subclass-specific)."""
         raise NotImplementedError
+
+    @property
+    def nlist(self) -> int:
+        return int(self.centroids.shape[0])
 
     @classmethod
     def from_chunks(
@@ -517,31 +556,13 @@ class IVFIndex(_IndexBuilder):
         machine, and did not on the shared one it was measured on).
     """
 
-    def _build(
+    def _fill(
         self,
         chunks: Callable[[], Iterator[NDArray[np.uint8]]],
         n: int,
-        *,
-        nlist: int | None = None,
-        nprobe: int = 4,
-        train_size: int = 65536,
-        iters: int = 10,
-        seed: int = 0,
-        centroids: NDArray[np.float32] | None = None,
-        cells: NDArray[np.integer] | None = None,
+        assign: NDArray[np.intp],
         threads: int | None = None,
     ) -> None:
-        self.centroids, assign = _quantise(
-            chunks,
-            n,
-            nlist=nlist,
-            train_size=train_size,
-            iters=iters,
-            seed=seed,
-            centroids=centroids,
-            cells=cells,
-        )
-        self.nprobe = nprobe
         self.threads = 1 if threads is None else threads
         order = np.argsort(assign, kind="stable")
         counts = np.bincount(assign, minlength=self.centroids.shape[0])
@@ -556,10 +577,6 @@ class IVFIndex(_IndexBuilder):
             start += block.shape[0]
         self._data = data
         self._norms = _sqnorms(self._data)
-
-    @property
-    def nlist(self) -> int:
-        return int(self.centroids.shape[0])
 
     def cells(self) -> NDArray[np.uint16 | np.int32]:
         """The coarse cell of every descriptor, in the order they were given (for caching)."""
@@ -675,31 +692,14 @@ class FaissIndex(_IndexBuilder):
     descriptors are stored as 128-byte codes (no residuals), searched by FAISS in C++.
     """
 
-    def _build(
+    def _fill(
         self,
         chunks: Callable[[], Iterator[NDArray[np.uint8]]],
         n: int,
-        *,
-        nlist: int | None = None,
-        nprobe: int = 4,
-        train_size: int = 65536,
-        iters: int = 10,
-        seed: int = 0,
-        centroids: NDArray[np.float32] | None = None,
-        cells: NDArray[np.integer] | None = None,
+        assign: NDArray[np.intp],
     ) -> None:
         import faiss  # optional dependency
 
-        self.centroids, assign = _quantise(
-            chunks,
-            n,
-            nlist=nlist,
-            train_size=train_size,
-            iters=iters,
-            seed=seed,
-            centroids=centroids,
-            cells=cells,
-        )
         nl = self.centroids.shape[0]
         quantizer = faiss.IndexFlatL2(_DIM)
         quantizer.add(self.centroids)
@@ -719,11 +719,6 @@ class FaissIndex(_IndexBuilder):
         self._index = index
         self._quantizer = quantizer
         self._n = n
-        self.nprobe = nprobe
-
-    @property
-    def nlist(self) -> int:
-        return int(self.centroids.shape[0])
 
     def cells(self) -> NDArray[np.uint16 | np.int32]:
         """The coarse cell of every descriptor, in the order they were given (for caching)."""
