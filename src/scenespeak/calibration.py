@@ -717,6 +717,15 @@ class Rectification:
         with np.errstate(divide="ignore", invalid="ignore"):
             return np.where(d > 0, self.focal * self.baseline / d, np.inf)
 
+    def _camera(
+        self, side: str
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+        """K, distortion, rectifying rotation and projection matrix of one camera."""
+        rig = self.rig
+        if side == "left":
+            return rig.K_left, rig.dist_left, self.R1, self.P1
+        return rig.K_right, rig.dist_right, self.R2, self.P2
+
     def rectify_points(self, xy: ArrayLike, side: str = "left") -> NDArray[np.float64]:
         """Map pixel coordinates of an input image to the rectified image.
 
@@ -729,12 +738,7 @@ class Rectification:
         pts = np.asarray(xy, dtype=np.float64).reshape(-1, 2)
         if not self.needs_resampling or len(pts) == 0:
             return pts.copy()
-        rig = self.rig
-        K, D, Rr, P = (
-            (rig.K_left, rig.dist_left, self.R1, self.P1)
-            if side == "left"
-            else (rig.K_right, rig.dist_right, self.R2, self.P2)
-        )
+        K, D, Rr, P = self._camera(side)
         out = cv2.undistortPoints(
             pts.reshape(-1, 1, 2),
             K,
@@ -751,12 +755,7 @@ class Rectification:
         pts = np.asarray(xy, dtype=np.float64).reshape(-1, 2)
         if not self.needs_resampling or len(pts) == 0:
             return pts.copy()
-        rig = self.rig
-        K, D, Rr, P = (
-            (rig.K_left, rig.dist_left, self.R1, self.P1)
-            if side == "left"
-            else (rig.K_right, rig.dist_right, self.R2, self.P2)
-        )
+        K, D, Rr, P = self._camera(side)
         rays = np.column_stack([pts, np.ones(len(pts))]) @ np.linalg.inv(P[:, :3]).T
         rays = rays @ Rr  # Rr.T @ ray for each row: back to the original camera frame
         img, _ = cv2.projectPoints(rays.reshape(-1, 1, 3), np.zeros(3), np.zeros(3), K, D)
