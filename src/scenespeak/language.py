@@ -939,9 +939,22 @@ def relation_of_pair(
     t = thresholds or DEFAULT_THRESHOLDS
     argument = _label(argument, "argument")
     referent = _label(referent, "referent")
-    vertical = None
     if (a_heights is None) != (b_heights is None):
         raise InputError("a_heights/b_heights", "give the heights of both objects, or neither")
+    return _describe_pair(pair, argument, referent, a_heights, b_heights, t)
+
+
+def _describe_pair(
+    pair: PairHistograms,
+    argument: str,
+    referent: str,
+    a_heights: ArrayLike | None,
+    b_heights: ArrayLike | None,
+    t: Thresholds,
+    degrees: tuple[dict[str, DirectionDegree], dict[str, DirectionDegree]] | None = None,
+) -> Relation:
+    """The rule base on one ordered pair (labels and heights already checked)."""
+    vertical = None
     if a_heights is not None and b_heights is not None:
         vertical = vertical_relation(
             a_heights, b_heights, horizontal_overlap=pair.horizontal_overlap, thresholds=t
@@ -957,6 +970,7 @@ def relation_of_pair(
         vertical=vertical,
         hybrid=pair.hybrid,
         frame="object",
+        degrees=degrees,
     )
 
 
@@ -996,42 +1010,14 @@ def relations_of_pair(
         raise InputError("pair", "histograms must have one length, a multiple of 4 (>= 8)")
     deg0, deg2 = four_degrees(pair.f0), four_degrees(pair.f2)
     back = pair.reversed()
-    out = []
-    for p, arg, ref, ha, hb, degrees in (
-        (pair, argument, referent, a_heights, b_heights, (deg0, deg2)),
-        (
-            back,
-            referent,
-            argument,
-            b_heights,
-            a_heights,
-            (
-                {d: deg0[_OPPOSITE[d]] for d in DIRECTIONS},
-                {d: deg2[_OPPOSITE[d]] for d in DIRECTIONS},
-            ),
-        ),
-    ):
-        vertical = None
-        if ha is not None and hb is not None:
-            vertical = vertical_relation(
-                ha, hb, horizontal_overlap=p.horizontal_overlap, thresholds=t
-            )
-        out.append(
-            _relation_from(
-                p.f0,
-                p.f2,
-                arg,
-                ref,
-                t,
-                overlap=p.overlap,
-                referent_overlap=p.referent_overlap,
-                vertical=vertical,
-                hybrid=p.hybrid,
-                frame="object",
-                degrees=degrees,
-            )
-        )
-    return out[0], out[1]
+    reversed_degrees = (
+        {d: deg0[_OPPOSITE[d]] for d in DIRECTIONS},
+        {d: deg2[_OPPOSITE[d]] for d in DIRECTIONS},
+    )
+    return (
+        _describe_pair(pair, argument, referent, a_heights, b_heights, t, (deg0, deg2)),
+        _describe_pair(back, referent, argument, b_heights, a_heights, t, reversed_degrees),
+    )
 
 
 def relate(
