@@ -242,3 +242,22 @@ def test_cropped_dense_map_describes_the_scene_like_the_full_one(card_db: Path) 
     ab = crop.relation("astronaut", "chelsea")
     ba = crop.relation("chelsea", "astronaut")
     assert np.array_equal(ba.f0, np.roll(ab.f0, 90)) and np.array_equal(ba.f2, np.roll(ab.f2, 90))
+
+
+def test_a_failing_labelling_is_raised_not_hung(
+    card_db: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # the stereo stage runs in a second thread and waits for the labels' outlines: when the
+    # labelling fails, the error comes out and the worker is released
+    def broken(self: ObjectDatabase, *args: Any, **kwargs: Any) -> Any:
+        raise DatabaseError(str(self.path), "database disk image is malformed")
+
+    monkeypatch.setattr(ObjectDatabase, "label", broken)
+    with pytest.raises(DatabaseError, match="malformed"):
+        _describe(NEAR, card_db)
+
+
+def test_stage_timings_are_reported(card_db: Path) -> None:
+    desc = _describe(NEAR, card_db)
+    assert set(desc.timings) == {"sift", "label", "stereo", "wait", "objects", "relations"}
+    assert all(v >= 0.0 for v in desc.timings.values())

@@ -435,3 +435,36 @@ def _half_rig() -> StereoRig:
     K1 = [[F, 0, CX], [0, F, CY], [0, 0, 1]]
     K2 = [[F, 0, CX + DOFFS], [0, F, CY], [0, 0, 1]]
     return StereoRig((370, 250), K1, K2, None, None, np.eye(3), [-B, 0, 0])
+
+
+def test_dense_roi_may_come_from_a_function() -> None:
+    # the pipeline finds the region (the recognised outlines) while the matching runs: a
+    # function called once, before the dense map, gives the map the region a tuple gives
+    from cardscene import BASELINE, HFOV, H, W, card_pair
+
+    from scenespeak.calibration import rig_from_short
+
+    left, right = card_pair({"astronaut": (-0.1, 1.2, 0.2), "chelsea": (0.15, 1.0, 0.2)})
+    # no texture, so no keypoints, along the top and the left edge
+    left[:100] = right[:100] = left[:, :100] = right[:, :100] = 128
+    rig = rig_from_short(BASELINE, HFOV, (W, H))
+    without = stereo_points(left, right, rig, dense_crop=True)
+    assert without.dense is not None and without.dense.roi is not None
+    x0, y0, _, _ = without.dense.roi
+    assert x0 > 20 and y0 > 20  # the keypoints do not reach the top-left corner
+    region = (5.0, 3.0, 20.0, 15.0)
+    calls: list[int] = []
+
+    def later() -> tuple[float, float, float, float]:
+        calls.append(1)
+        return region
+
+    as_tuple = stereo_points(left, right, rig, dense_crop=True, dense_roi=region)
+    as_call = stereo_points(left, right, rig, dense_crop=True, dense_roi=later)
+    assert calls == [1]
+    assert as_tuple.dense is not None and as_call.dense is not None
+    np.testing.assert_array_equal(as_call.dense.disparity, as_tuple.dense.disparity)
+    np.testing.assert_array_equal(as_call.points.xyz, as_tuple.points.xyz)
+    assert as_call.dense.roi is not None
+    x0, y0, x1, y1 = as_call.dense.roi
+    assert x0 <= 5 and y0 <= 3 and x1 >= 20 and y1 >= 15

@@ -282,19 +282,20 @@ _DENSE_DBSCAN_MAX = 1200
 
 def _dbscan_dense(p: NDArray[np.float64], eps: float, min_samples: int) -> NDArray[np.intp]:
     """:func:`dbscan` on the full matrix of squared distances (for small point sets)."""
+    from scipy.spatial.distance import cdist
+
     n = len(p)
     labels = np.full(n, -1, dtype=np.intp)
-    d2 = np.zeros((n, n))
-    for k in range(p.shape[1]):
-        diff = p[:, None, k] - p[None, :, k]
-        d2 += diff * diff
+    # SciPy's C loop: the same sums of squared coordinate differences, in the same order, as
+    # NumPy broadcasting would give (bit for bit), without its (n, n) temporaries
+    d2 = cdist(p, p, "sqeuclidean")
     near = d2 <= eps * eps
-    core = near.sum(axis=1) >= min_samples
+    core = np.count_nonzero(near, axis=1) >= min_samples
     core_idx = np.flatnonzero(core)
     m = len(core_idx)
     if m == 0:
         return labels
-    adj = near[np.ix_(core_idx, core_idx)]
+    adj = near[core_idx][:, core_idx]
     # connected components of the core points, breadth first from the lowest unvisited index,
     # so the clusters come numbered by their first core point
     comp = np.full(m, -1, dtype=np.intp)

@@ -36,7 +36,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable, Iterator, Mapping
-from concurrent.futures import ThreadPoolExecutor
+from concurrent.futures import Future, ThreadPoolExecutor
 from contextlib import AbstractContextManager, contextmanager
 from dataclasses import dataclass, field
 from os import PathLike
@@ -186,7 +186,10 @@ class SceneDescription:
     summary : str
         A short paragraph about the scene ("" without objects or when switched off).
     timings : dict of str to float
-        Seconds spent per stage.
+        Seconds spent per stage: ``sift`` (the left image; the right one runs at the same time
+        in a second thread), ``label``, ``stereo`` (in the second thread, while ``label`` runs),
+        ``wait`` (for the stereo stage after labelling), ``objects``, ``relations``. The wall
+        time is about ``sift + label + wait + objects + relations``.
     sources : dict of str to str
         The files the inputs came from, when known.
     """
@@ -412,26 +415,87 @@ def describe_scene(
     timings: dict[str, float] = {}
     say = progress or (lambda _stage: None)
 
-    # SIFT once per image, the two images at the same time (OpenCV releases the GIL), and the
-    # labelling of the left keypoints while the right image is still being processed. The
-    # database stays in this thread (SQLite connections belong to their thread).
+    # SIFT once per image, the two images at the same time (OpenCV releases the GIL). Once the
+    # right image's features exist, the worker thread goes on with the stereo matching (it
+    # does not need the labels) while this thread labels the left keypoints (the database
+    # stays in this thread: SQLite connections belong to their thread); the dense map, which
+    # must cover the recognised outlines, waits for the labels. The rest works on small
+    # matrices (a few hundred keypoints and points): OpenBLAS's second thread only costs
+    # there, and a lot when the other core is busy (a 200 x 128 x 200 product took 16 ms
+    # instead of 0.1 ms on the shared 2-core machine), so BLAS runs single-threaded throughout.
     say("sift")
-    with _timed(timings, "sift"), ThreadPoolExecutor(max_workers=1) as pool:
-        gray_r = to_gray(right)
-        future_r = pool.submit(detect, gray_r, precise_upscale=False)
+    outlines: Future[tuple[float, ...] | None] = Future()
+    with _single_threaded_blas(), ThreadPoolExecutor(max_workers=1) as pool:
+        t0 = time.perf_counter()
+        future_r = pool.submit(detect, to_gray(right), precise_upscale=False)
         feats_l = detect(to_gray(left), precise_upscale=False)
-        with _timed(timings, "label"):
-            labelling = db.label(feats_l, ratio=opts.label_ratio, min_inliers=opts.min_inliers)
-        feats_r = future_r.result()
-    timings["sift"] -= timings["label"]
-
-    # The rest works on small matrices (a few hundred keypoints and points): OpenBLAS's second
-    # thread only costs there, and a lot when the other core is busy (a 200 x 128 x 200 product
-    # took 16 ms instead of 0.1 ms on the shared 2-core machine), so BLAS runs single-threaded.
-    with _single_threaded_blas():
-        return _after_sift(
-            left, right, rig, opts, src, timings, say, feats_l, feats_r, labelling, lname, rname
+        timings["sift"] = time.perf_counter() - t0
+        future_st = pool.submit(
+            _stereo_stage,
+            left,
+            right,
+            rig,
+            opts,
+            feats_l,
+            future_r,
+            outlines.result if opts.dense else None,
+            (lname, rname),
+            timings,
         )
+        try:
+            with _timed(timings, "label"):
+                labelling = db.label(feats_l, ratio=opts.label_ratio, min_inliers=opts.min_inliers)
+            outlines.set_result(_outlines_box(labelling, left.shape[:2]))
+        finally:
+            if not outlines.done():  # labelling failed: let the worker finish
+                outlines.set_result(None)
+        say("stereo")
+        with _timed(timings, "wait"):
+            feats_r, result = future_st.result()
+        return _after_stereo(
+            left, right, opts, src, timings, say, feats_l, feats_r, result, labelling, lname
+        )
+
+
+def _stereo_stage(
+    left: NDArray[np.generic],
+    right: NDArray[np.generic],
+    rig: Any,
+    opts: PipelineOptions,
+    feats_l: Any,
+    future_r: Future[Any],
+    dense_roi: Callable[[], tuple[float, ...] | None] | None,
+    names: tuple[str, str],
+    timings: dict[str, float],
+) -> tuple[Any, Any]:
+    """The right image's features (from ``future_r``), then the stereo stage (worker thread)."""
+    from scenespeak import stereo
+
+    feats_r = future_r.result()
+    waited = [0.0]
+
+    def roi() -> tuple[float, ...] | None:
+        # the time spent waiting for the labels is not the stereo stage's
+        t0 = time.perf_counter()
+        box = None if dense_roi is None else dense_roi()
+        waited[0] = time.perf_counter() - t0
+        return box
+
+    with _timed(timings, "stereo"):
+        result = stereo.stereo_points(
+            left,
+            right,
+            rig,
+            ratio=opts.ratio,
+            features_left=feats_l,
+            features_right=feats_r,
+            left_name=names[0],
+            right_name=names[1],
+            dense_crop=opts.dense_crop,
+            dense_roi=roi,  # type: ignore[arg-type]
+        )
+    timings["stereo"] -= waited[0]
+    return feats_r, result
 
 
 def _single_threaded_blas() -> AbstractContextManager[object]:
@@ -441,37 +505,21 @@ def _single_threaded_blas() -> AbstractContextManager[object]:
     return limit()
 
 
-def _after_sift(
+def _after_stereo(
     left: NDArray[np.generic],
     right: NDArray[np.generic],
-    rig: Any,
     opts: PipelineOptions,
     src: dict[str, str],
     timings: dict[str, float],
     say: Callable[[str], None],
     feats_l: Any,
     feats_r: Any,
+    result: Any,
     labelling: Any,
     lname: str,
-    rname: str,
 ) -> SceneDescription:
-    """Stages 2-5 of :func:`describe_scene` once both images' features are known."""
-    from scenespeak import stereo
-
-    say("stereo")
-    with _timed(timings, "stereo"):
-        result = stereo.stereo_points(
-            left,
-            right,
-            rig,
-            ratio=opts.ratio,
-            features_left=feats_l,
-            features_right=feats_r,
-            left_name=lname,
-            right_name=rname,
-            dense_crop=opts.dense_crop,
-            dense_roi=_outlines_box(labelling, left.shape[:2]) if opts.dense else None,
-        )
+    """Stages 3-5 of :func:`describe_scene` once the labels and the stereo points are known."""
+    rig = result.rect.rig
     points = result.points
     if len(points.xyz) == 0:
         raise ImageError(

@@ -38,6 +38,7 @@ than 750 with more than 97 %.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from os import PathLike
 from pathlib import Path
@@ -188,12 +189,18 @@ class DenseDisparity:
         The rectification the map belongs to.
     min_disparity, num_disparities : int
         The disparity search range used.
+    roi : (x0, y0, x1, y1) or None
+        The part of the rectified left image that was computed (None: all of it).
+    pad : int
+        Pixels of context computed around ``roi`` (see :func:`dense_disparity`).
     """
 
     disparity: NDArray[np.float32]
     rect: Rectification
     min_disparity: int
     num_disparities: int
+    roi: tuple[int, int, int, int] | None = None
+    pad: int = 0
 
     def valid_fraction(self) -> float:
         """Fraction of pixels with a disparity."""
@@ -738,11 +745,12 @@ def dense_disparity(
     x0, x1 = max(0, int(x0)), min(w, math.ceil(x1))
     y0, y1 = max(0, int(y0)), min(h, math.ceil(y1))
     out = np.full((h, w), np.nan, np.float32)
+    box = None if roi is None else (x0, y0, x1, y1)
+    pad = block_size // 2 + 2 if pad is None else max(0, int(pad))
     if x1 <= x0 or y1 <= y0:
-        return DenseDisparity(out, rect, mn, num)
+        return DenseDisparity(out, rect, mn, num, box, pad)
     # a crop: rows y0..y1; columns from far enough left that every disparity can be searched
     xa = max(0, x0 - max(0, mn + num))
-    pad = block_size // 2 + 2 if pad is None else max(0, int(pad))
     ya, yb = max(0, y0 - pad), min(h, y1 + pad)
     xb = min(w, x1 + pad)
     cl = np.ascontiguousarray(gl[ya:yb, xa:xb])
@@ -764,7 +772,7 @@ def dense_disparity(
     d = raw.astype(np.float32) / 16.0
     d[raw < mn * 16] = np.nan  # OpenCV marks unknown pixels with (minDisparity - 1) * 16
     out[y0:y1, x0:x1] = d[y0 - ya : y1 - ya, x0 - xa : x1 - xa]
-    return DenseDisparity(out, rect, mn, num)
+    return DenseDisparity(out, rect, mn, num, box, pad)
 
 
 def region_points(
@@ -845,19 +853,31 @@ def _dense_box(
     margin: int,
 ) -> tuple[int, int, int, int]:
     """Bounding box (rectified pixels) of the matches to verify and of an input-image region."""
+    return _pixel_box([m.left_rect], rect, extra, margin)
+
+
+def _pixel_box(
+    pts: list[NDArray[np.float64]],
+    rect: Rectification,
+    extra: tuple[float, float, float, float] | None,
+    margin: int,
+) -> tuple[int, int, int, int]:
+    """Bounding box (rectified pixels) of rectified points and of an input-image region."""
     w, h = rect.rig.image_size
-    pts = [m.left_rect]
+    pts = list(pts)
     if extra is not None:
         x0, y0, x1, y1 = (float(v) for v in extra)
         corners = np.array([[x0, y0], [x1, y0], [x1, y1], [x0, y1]], dtype=np.float64)
         pts.append(rect.rectify_points(corners, "left") if rect.needs_resampling else corners)
+    if not pts:
+        return (0, 0, 0, 0)
     xy = np.concatenate(pts)
     xy = xy[np.all(np.isfinite(xy), axis=1)]
     if len(xy) == 0:
         return (0, 0, 0, 0)
     lo = np.floor(xy.min(axis=0)).astype(int) - margin
     hi = np.ceil(xy.max(axis=0)).astype(int) + margin + 1
-    return (max(0, lo[0]), max(0, lo[1]), min(w, hi[0]), min(h, hi[1]))
+    return (max(0, int(lo[0])), max(0, int(lo[1])), min(w, int(hi[0])), min(h, int(hi[1])))
 
 
 def stereo_points(
@@ -876,7 +896,9 @@ def stereo_points(
     right_name: str = "right image",
     min_points: int = 0,
     dense_crop: bool = False,
-    dense_roi: tuple[float, float, float, float] | None = None,
+    dense_roi: tuple[float, float, float, float]
+    | Callable[[], tuple[float, float, float, float] | None]
+    | None = None,
 ) -> StereoResult:
     """Match and triangulate a stereo pair in one call (SIFT runs once per image).
 
@@ -909,9 +931,12 @@ def stereo_points(
         to check (plus ``dense_roi``) instead of the whole image: the same checks for a
         fraction of the cost when the scene does not fill the image (about 2.5× faster on the
         rendered table scenes); elsewhere the map is NaN.
-    dense_roi : (x0, y0, x1, y1), optional
+    dense_roi : (x0, y0, x1, y1) or callable, optional
         With ``dense_crop``, a region of the INPUT left image (pixels) the dense map must also
-        cover, e.g. the recognised objects' outlines for :func:`region_points`.
+        cover, e.g. the recognised objects' outlines for :func:`region_points`. It may be a
+        function of no arguments returning the region (or None), called once the matches are
+        known and just before the dense map is computed: a caller running this in a second
+        thread can find the region meanwhile (the pipeline labels the objects).
 
     Returns
     -------
@@ -936,7 +961,8 @@ def stereo_points(
             # the disparity range for SGBM comes from the strict in-band matches
             strict = _select(cand, fl, rect, search="band", ratio=ratio, **kw)
             m = _select(cand, fl, rect, search="band", ratio=band_ratio, **kw)
-            roi = _dense_box(m, rect, dense_roi, margin=5) if dense_crop else None
+            extra = dense_roi() if callable(dense_roi) else dense_roi
+            roi = _dense_box(m, rect, extra, margin=5) if dense_crop else None
             dense = dense_disparity(
                 gl, gr, rect, keypoint_disparities=strict.disparity, roi=roi, pad=16
             )
