@@ -165,52 +165,36 @@ def test_usage_error_is_not_a_traceback(capsys: pytest.CaptureFixture[str]) -> N
 # bad input: one line naming the file, exit 2
 
 
-def test_missing_image(scene: dict[str, Path], capsys: pytest.CaptureFixture[str]) -> None:
-    missing = scene["left"].with_name("nope.png")
-    code, _, err = _run(_describe(scene, left=missing), capsys)
-    _assert_one_line_error(code, err, "nope.png", "no such file")
+def _missing_image(scene: dict[str, Path], tmp: Path) -> dict[str, Path]:
+    return {"left": scene["left"].with_name("nope.png")}
 
 
-def test_corrupt_image(
-    scene: dict[str, Path], tmp_path: Path, capsys: pytest.CaptureFixture[str]
-) -> None:
-    bad = tmp_path / "corrupt.png"
+def _corrupt_image(scene: dict[str, Path], tmp: Path) -> dict[str, Path]:
+    bad = tmp / "corrupt.png"
     bad.write_bytes(b"\x89PNG\r\n\x1a\n" + bytes(range(256)) * 4)
-    code, _, err = _run(_describe(scene, right=bad), capsys)
-    _assert_one_line_error(code, err, "corrupt.png", "cannot be read")
+    return {"right": bad}
 
 
-def test_empty_image(
-    scene: dict[str, Path], tmp_path: Path, capsys: pytest.CaptureFixture[str]
-) -> None:
-    empty = tmp_path / "empty.png"
+def _empty_image(scene: dict[str, Path], tmp: Path) -> dict[str, Path]:
+    empty = tmp / "empty.png"
     empty.write_bytes(b"")
-    code, _, err = _run(_describe(scene, left=empty), capsys)
-    _assert_one_line_error(code, err, "empty.png", "empty")
+    return {"left": empty}
 
 
-def test_left_and_right_of_different_sizes(
-    scene: dict[str, Path], tmp_path: Path, capsys: pytest.CaptureFixture[str]
-) -> None:
+def _sizes_differ(scene: dict[str, Path], tmp: Path) -> dict[str, Path]:
     small = cv2.resize(cv2.imread(str(scene["right"])), (320, 240))
-    path = tmp_path / "small_right.png"
+    path = tmp / "small_right.png"
     cv2.imwrite(str(path), small)
-    code, _, err = _run(_describe(scene, right=path), capsys)
-    _assert_one_line_error(code, err, "small_right.png", "320x240")
+    return {"right": path}
 
 
-def test_calibration_with_nan(
-    scene: dict[str, Path], tmp_path: Path, capsys: pytest.CaptureFixture[str]
-) -> None:
-    calib = tmp_path / "nan.json"
+def _calib_nan(scene: dict[str, Path], tmp: Path) -> dict[str, Path]:
+    calib = tmp / "nan.json"
     calib.write_text('{"baseline": NaN, "hfov_deg": 60, "image_size": [640, 480]}')
-    code, _, err = _run(_describe(scene, calib=calib), capsys)
-    _assert_one_line_error(code, err, "nan.json")
+    return {"calib": calib}
 
 
-def test_calibration_with_a_singular_matrix(
-    scene: dict[str, Path], tmp_path: Path, capsys: pytest.CaptureFixture[str]
-) -> None:
+def _calib_singular(scene: dict[str, Path], tmp: Path) -> dict[str, Path]:
     k = [[554.0, 0, 320], [0, 554.0, 240], [0, 0, 1]]
     full = {
         "image_size": [W, H],
@@ -221,54 +205,72 @@ def test_calibration_with_a_singular_matrix(
         "R": np.eye(3).tolist(),
         "T": [-0.12, 0, 0],
     }
-    calib = tmp_path / "singular.json"
+    calib = tmp / "singular.json"
     calib.write_text(json.dumps(full))
-    code, _, err = _run(_describe(scene, calib=calib), capsys)
-    _assert_one_line_error(code, err, "singular.json", "K_left")
+    return {"calib": calib}
 
 
-def test_calibration_for_another_image_size(
-    scene: dict[str, Path], tmp_path: Path, capsys: pytest.CaptureFixture[str]
-) -> None:
-    calib = tmp_path / "small.json"
+def _calib_other_size(scene: dict[str, Path], tmp: Path) -> dict[str, Path]:
+    calib = tmp / "small.json"
     calib.write_text(json.dumps({"baseline": 0.12, "hfov_deg": 60, "image_size": [320, 240]}))
-    code, _, err = _run(_describe(scene, calib=calib), capsys)
-    _assert_one_line_error(code, err, "small.json", "320x240")
+    return {"calib": calib}
 
 
-def test_database_that_is_not_ours(
-    scene: dict[str, Path], tmp_path: Path, capsys: pytest.CaptureFixture[str]
-) -> None:
-    text = tmp_path / "notes.db"
+def _db_text_file(scene: dict[str, Path], tmp: Path) -> dict[str, Path]:
+    text = tmp / "notes.db"
     text.write_text("these are my notes, not a database\n")
-    code, _, err = _run(_describe(scene, db=text), capsys)
-    _assert_one_line_error(code, err, "notes.db", "not a scenespeak object database")
-    other = tmp_path / "other.db"
+    return {"db": text}
+
+
+def _db_someone_elses(scene: dict[str, Path], tmp: Path) -> dict[str, Path]:
+    other = tmp / "other.db"
     with sqlite3.connect(other) as conn:
         conn.execute("CREATE TABLE songs(title TEXT)")
-    code, _, err = _run(_describe(scene, db=other), capsys)
-    _assert_one_line_error(code, err, "other.db")
+    return {"db": other}
 
 
-def test_empty_database(
-    scene: dict[str, Path], tmp_path: Path, capsys: pytest.CaptureFixture[str]
-) -> None:
+def _db_empty(scene: dict[str, Path], tmp: Path) -> dict[str, Path]:
     from scenespeak.database import ObjectDatabase
 
-    empty = tmp_path / "empty.db"
+    empty = tmp / "empty.db"
     ObjectDatabase.create(empty).close()
-    code, _, err = _run(_describe(scene, db=empty), capsys)
-    _assert_one_line_error(code, err, "empty.db", "no objects")
+    return {"db": empty}
 
 
-def test_textureless_scene(
-    scene: dict[str, Path], tmp_path: Path, capsys: pytest.CaptureFixture[str]
-) -> None:
+def _textureless(scene: dict[str, Path], tmp: Path) -> dict[str, Path]:
     gray = np.full((H, W, 3), 128, np.uint8)
-    left = _write(tmp_path / "blank_left.png", gray)
-    right = _write(tmp_path / "blank_right.png", gray)
-    code, _, err = _run(_describe(scene, left=left, right=right), capsys)
-    _assert_one_line_error(code, err, "blank_left.png", "texture")
+    return {
+        "left": _write(tmp / "blank_left.png", gray),
+        "right": _write(tmp / "blank_right.png", gray),
+    }
+
+
+BAD_INPUT = {
+    # case: (what to put in place of the good file(s), words the one-line error must hold)
+    "missing image": (_missing_image, ("nope.png", "no such file")),
+    "corrupt image": (_corrupt_image, ("corrupt.png", "cannot be read")),
+    "empty image": (_empty_image, ("empty.png", "empty")),
+    "left and right of different sizes": (_sizes_differ, ("small_right.png", "320x240")),
+    "calibration with NaN": (_calib_nan, ("nan.json",)),
+    "calibration with a singular matrix": (_calib_singular, ("singular.json", "K_left")),
+    "calibration for another image size": (_calib_other_size, ("small.json", "320x240")),
+    "database that is a text file": (
+        _db_text_file,
+        ("notes.db", "not a scenespeak object database"),
+    ),
+    "database of another program": (_db_someone_elses, ("other.db",)),
+    "empty database": (_db_empty, ("empty.db", "no objects")),
+    "textureless scene": (_textureless, ("blank_left.png", "texture")),
+}
+
+
+@pytest.mark.parametrize("case", list(BAD_INPUT))
+def test_bad_input_is_one_line_naming_the_file(
+    case: str, scene: dict[str, Path], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    make, needles = BAD_INPUT[case]
+    code, _, err = _run(_describe(scene, **make(scene, tmp_path)), capsys)
+    _assert_one_line_error(code, err, *needles)
 
 
 def test_missing_training_image_leaves_the_database_as_it_was(
