@@ -774,31 +774,71 @@ def plot_report(
     matplotlib.figure.Figure
     """
     view = _scene_view(description) if _view is None else _view
-    panels = _scene_figures(view, pair)
-    fig = Figure(figsize=(16.0, 10.0), dpi=100, layout="constrained")
-    grid = fig.add_gridspec(2, 3, width_ratios=[1.0, 1.0, 0.85])
-    slots = {
-        "matches": grid[0, 0:2],
-        "points3d": grid[1, 0],
-        "hulls": grid[1, 1],
-        "histograms": grid[1, 2],
-    }
-    for name, build in panels:
-        ax = fig.add_subplot(slots[name])
-        ax.imshow(_render(build(), dpi=90.0))
+    images = {name: _render(build(), dpi=90.0) for name, build in _scene_figures(view, pair)}
+    page_w, page_h, margin, gap, title_h = 16.0, 10.0, 0.25, 0.2, 0.6
+    fig = Figure(figsize=(page_w, page_h), dpi=100)
+    fig.suptitle("scenespeak: what the stereo pair shows", fontsize=14, y=1.0 - 0.15 / page_h)
+
+    def aspect(name: str) -> float:
+        h, w = images[name].shape[:2]
+        return w / h
+
+    def place(name: str, x: float, y: float, w: float, h: float) -> None:
+        # (x, y) is the top-left corner in inches from the page's top-left
+        ax = fig.add_axes((x / page_w, 1.0 - (y + h) / page_h, w / page_w, h / page_h))
+        ax.imshow(images[name])
         ax.set_axis_off()
-    tax = fig.add_subplot(grid[0, 2])
-    tax.set_axis_off()
-    tax.text(
-        0.0, 1.0, _report_text(view), va="top", ha="left", wrap=True, fontsize=10, family="serif"
+
+    # Left block: the matches across its width, the 3-D points and the hulls side by side
+    # below, as large as the page allows with every picture at its own aspect ratio.
+    top = title_h
+    room = page_h - top - margin
+    right_w = 4.6
+    left_w = page_w - 2 * margin - gap - right_w
+    below = [n for n in ("points3d", "hulls") if n in images]
+
+    def left_height(w: float) -> float:
+        h = w / aspect("matches") if "matches" in images else 0.0
+        if below:
+            h += max((w - gap) / len(below) / aspect(n) for n in below) + gap
+        return h
+
+    if left_height(left_w) > room:
+        left_w *= room / left_height(left_w)
+    y = top
+    if "matches" in images:
+        h = left_w / aspect("matches")
+        place("matches", margin, y, left_w, h)
+        y += h + gap
+    cell = (left_w - gap) / max(len(below), 1)
+    for k, name in enumerate(below):
+        place(name, margin + k * (cell + gap), y, cell, cell / aspect(name))
+    # Right column: the histograms at the bottom, the sentences above them.
+    x_right = page_w - margin - right_w
+    hist_h = 0.0
+    if "histograms" in images:
+        hist_h = right_w / aspect("histograms")
+        place("histograms", x_right, page_h - margin - hist_h, right_w, hist_h)
+    text = _report_text(view)
+    text_h = room - hist_h - gap
+    lines = text.count("\n") + 1
+    size = max(6.0, min(10.0, 72.0 * text_h / (1.3 * lines)))  # shrink a long list to fit
+    fig.text(
+        x_right / page_w,
+        1.0 - top / page_h,
+        text,
+        va="top",
+        ha="left",
+        fontsize=size,
+        family="serif",
     )
-    fig.suptitle("scenespeak: what the stereo pair shows", fontsize=14)
     return fig
 
 
 def _render(fig: Figure, dpi: float = 100.0) -> NDArray[np.uint8]:
     buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=dpi, facecolor="white")
+    # cropped to what is drawn, so that the page can lay each picture out at its real shape
+    fig.savefig(buf, format="png", dpi=dpi, facecolor="white", bbox_inches="tight", pad_inches=0.05)
     buf.seek(0)
     from matplotlib.image import imread
 
