@@ -103,17 +103,31 @@ def test_far_small_cards_need_the_dense_region(card_db: Path) -> None:
 
 
 def test_an_unrecognised_card_becomes_an_unknown_object(card_db: Path) -> None:
-    # A 10 cm astronaut card 1.9 m away is too small to recognise: its points are clustered.
-    cards = {"astronaut": (-0.3, 1.9, 0.1), "chelsea": (0.2, 1.0, 0.2)}
+    # The camera photo is not in the database: its card's points are clustered.
+    cards = {"camera": (-0.3, 1.6, 0.15), "chelsea": (0.2, 1.0, 0.2)}
     desc = _describe(cards, card_db)
     labels = [o.label for o in desc.objects]
-    assert "chelsea" in labels and "astronaut" not in labels
+    assert "chelsea" in labels and "camera" not in labels
     unknown = [o for o in desc.objects if o.label.startswith("unknown object")]
     assert len(unknown) == 1  # the wall 4 m away is background, not an object
     assert unknown[0].source == "clustered"
-    assert unknown[0].plane_centroid == pytest.approx([-0.3, 1.9], abs=0.03)
+    assert unknown[0].plane_centroid == pytest.approx([-0.3, 1.6], abs=0.03)
     rel = desc.relation("unknown object 1", "chelsea")
-    assert (rel.primary, rel.secondary) == ("behind", "left")  # 0.9 m behind, 0.5 m left
+    assert (rel.primary, rel.secondary) == ("behind", "left")  # 0.6 m behind, 0.5 m left
+
+
+def test_a_small_far_card_is_recognised_by_the_small_object_rule(card_db: Path) -> None:
+    # A 10 cm astronaut card 1.9 m away (about 30 px wide) carries only a few matches: the
+    # small-detection rule (an outline of at most 8,000 px² needs 4 inliers at distinct
+    # positions) recognises it where the general rule (8 inliers) cannot.
+    cards = {"astronaut": (-0.3, 1.9, 0.1), "chelsea": (0.2, 1.0, 0.2)}
+    desc = _describe(cards, card_db)
+    far = desc.object("astronaut")
+    assert far is not None and far.source == "dense"
+    assert far.plane_centroid == pytest.approx([-0.3, 1.9], abs=0.03)
+    strict = _describe(cards, card_db, min_inliers_small=8)
+    assert strict.object("astronaut") is None
+    assert any(o.label.startswith("unknown object") for o in strict.objects)  # clustered
 
 
 def test_textureless_pair_is_an_image_error(card_db: Path) -> None:

@@ -74,6 +74,10 @@ class PipelineOptions:
         descriptor of another object, so a looser value than for stereo is right).
     min_inliers : int
         Geometric inliers needed to accept a recognised object.
+    min_inliers_small, small_area : int, float
+        A *small* detection (its outline in the scene covers at most ``small_area`` square
+        pixels: a far object, with few keypoints) needs only ``min_inliers_small`` inliers at
+        distinct positions (``ObjectDatabase.label``; figures in ``docs/database.md``).
     dense : bool
         Take recognised objects' points from dense stereo inside their carried outline.
     dense_min_points : int
@@ -103,6 +107,8 @@ class PipelineOptions:
     ratio: float = 0.6
     label_ratio: float = 0.8
     min_inliers: int = 8
+    min_inliers_small: int = 4
+    small_area: float = 8000.0
     dense: bool = True
     dense_min_points: int = 30
     dense_max_points: int = 300
@@ -444,7 +450,13 @@ def describe_scene(
         )
         try:
             with _timed(timings, "label"):
-                labelling = db.label(feats_l, ratio=opts.label_ratio, min_inliers=opts.min_inliers)
+                labelling = db.label(
+                    feats_l,
+                    ratio=opts.label_ratio,
+                    min_inliers=opts.min_inliers,
+                    min_inliers_small=opts.min_inliers_small,
+                    small_area=opts.small_area,
+                )
             outlines.set_result(_outlines_box(labelling, left.shape[:2]))
         finally:
             if not outlines.done():  # labelling failed: let the worker finish
