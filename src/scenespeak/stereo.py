@@ -749,12 +749,21 @@ def dense_disparity(
     pad = block_size // 2 + 2 if pad is None else max(0, int(pad))
     if x1 <= x0 or y1 <= y0:
         return DenseDisparity(out, rect, mn, num, box, pad)
-    # a crop: rows y0..y1; columns from far enough left that every disparity can be searched
-    xa = max(0, x0 - max(0, mn + num))
+    # A crop: rows y0..y1; columns from far enough left that every disparity can be searched.
+    # OpenCV computes nothing in the first minDisparity + numDisparities columns of its input;
+    # where the crop would have to start left of the image, black columns stand in, so that
+    # the image's own left part gets the disparities its right-image partners allow (pixels
+    # whose partner would lie in the black band match nothing there).
+    xa = x0 - max(0, mn + num)
+    border = max(0, -xa)
+    xa = max(0, xa)
     ya, yb = max(0, y0 - pad), min(h, y1 + pad)
     xb = min(w, x1 + pad)
     cl = np.ascontiguousarray(gl[ya:yb, xa:xb])
     cr = np.ascontiguousarray(gr[ya:yb, xa:xb])
+    if border:
+        cl = cv2.copyMakeBorder(cl, 0, 0, border, 0, cv2.BORDER_CONSTANT, value=0)
+        cr = cv2.copyMakeBorder(cr, 0, 0, border, 0, cv2.BORDER_CONSTANT, value=0)
     bs = int(block_size) | 1
     sgbm = cv2.StereoSGBM_create(
         minDisparity=mn,
@@ -771,7 +780,7 @@ def dense_disparity(
     raw = sgbm.compute(cl, cr)
     d = raw.astype(np.float32) / 16.0
     d[raw < mn * 16] = np.nan  # OpenCV marks unknown pixels with (minDisparity - 1) * 16
-    out[y0:y1, x0:x1] = d[y0 - ya : y1 - ya, x0 - xa : x1 - xa]
+    out[y0:y1, x0:x1] = d[y0 - ya : y1 - ya, border + x0 - xa : border + x1 - xa]
     return DenseDisparity(out, rect, mn, num, box, pad)
 
 
