@@ -5,7 +5,10 @@ Prints median wall-clock times (one process, one thread) of F0 + F2:
 * two convex 30-vertex polygons at 180 directions (target: <= 0.5 ms),
 * two non-convex (star-shaped) 200-vertex polygons at 180 directions,
 * two 512 x 512 boolean masks (Matsakis & Wendling's C raster code: ~53 ms per histogram),
-* how the time scales with the vertex count and with the number of directions.
+* how the time scales with the vertex count and with the number of directions,
+* the 10 pairs of a 5-object scene (convex hulls of 8-22 vertices, as the pipeline makes):
+  one ``force_histograms`` call per pair against one sweep for all pairs
+  (``forces._many_f0_and_f2``, what ``language.relate_objects`` uses).
 
 "F0+F2" is timed two ways: two calls of ``force_histogram`` (r=0, then r=2), and one call of
 ``force_histograms`` (both exponents sharing the validation and the sweep).
@@ -102,6 +105,34 @@ def polygon_vertices(mask: NDArray[np.bool_], tolerance: float) -> int:
     return len(_mask_region(mask, "mask", tolerance).start)
 
 
+def scene_hulls() -> list[Array]:
+    """Five convex hulls of 8-22 vertices, 5-25 cm across, 0.2-1 m apart (like the bench
+    scene's objects on the ground plane)."""
+    rng = np.random.default_rng(4)
+    out = []
+    for k, n in enumerate((17, 13, 8, 22, 20)):
+        centre = (0.35 * k - 0.7 + rng.uniform(-0.05, 0.05), 1.0 + rng.uniform(-0.3, 0.3))
+        out.append(convex(n, centre, rng.uniform(0.05, 0.12), rng.uniform(0, 1)))
+    return out
+
+
+def scene_pairs(directions: int = 180) -> tuple[Callable[[], object], Callable[[], object]]:
+    """(per pair, all pairs at once) F0+F2 of every unordered pair of :func:`scene_hulls`."""
+    from scenespeak.forces import _many_f0_and_f2, _polygon_region
+
+    hulls = scene_hulls()
+    index = [(i, j) for i in range(len(hulls)) for j in range(i + 1, len(hulls))]
+
+    def per_pair() -> object:
+        return [force_histograms(hulls[i], hulls[j], directions=directions) for i, j in index]
+
+    def all_pairs() -> object:
+        regions = [_polygon_region(h, "hull") for h in hulls]
+        return _many_f0_and_f2([(regions[i], regions[j], True) for i, j in index], directions)
+
+    return per_pair, all_pairs
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="fewer repeats")
@@ -160,6 +191,15 @@ def main() -> None:
         t200 = median_ms(f0_f2_calls(a200, b200, d), rep_big)
         tm = median_ms(f0_f2_calls(ma, mb, d), rep_big)
         print(f"| {d} | {t30:.3f} | {t200:.3f} | {tm:.3f} |")
+
+    print("\nThe 10 pairs of a 5-object scene (convex hulls, 8-22 vertices), F0+F2:\n")
+    print("| case | per pair (force_histograms) | all pairs, one sweep |")
+    print("| --- | ---: | ---: |")
+    per_pair, all_pairs = scene_pairs()
+    print(
+        f"| 10 pairs, 180 directions | {median_best(per_pair, rep_small)} | "
+        f"{median_best(all_pairs, rep_small)} |"
+    )
 
     print(f"\nload average after: {' '.join(f'{x:.2f}' for x in os.getloadavg())}")
 

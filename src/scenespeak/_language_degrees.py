@@ -187,6 +187,125 @@ def direction_degree(h: NDArray[np.float64], index: int) -> DirectionDegree:
     return DirectionDegree(float(min(max(degree, 0.0), 1.0)), theta, total, contrary)
 
 
+def _prefix_sums(x: NDArray[np.float64], length: NDArray[np.intp]) -> NDArray[np.float64]:
+    """``x[r, :length[r]].sum()`` for every row ``r``, bit for bit (rows of at most 128).
+
+    NumPy sums a contiguous run of ``L <= 128`` float64 values in a fixed order: eight running
+    sums ``r[j] = x[j] + x[j+8] + ...`` over the first ``8 * (L // 8)`` values, combined as
+    ``((r0+r1)+(r2+r3))+((r4+r5)+(r6+r7))``, then the last ``L % 8`` values one by one (for
+    ``L < 8`` only the one-by-one part, from 0). This does the same for all rows at once;
+    adding 0.0 for the values past a row's length changes nothing. Pinned by
+    ``test_prefix_sums_match_numpy_bit_for_bit``.
+    """
+    rows, width = x.shape
+    if width > 128:
+        raise ValueError("runs longer than 128 values are summed in another order")
+    r = np.arange(rows)
+    nblk = width // 8
+    full = length // 8
+    res = np.zeros(rows)
+    if nblk:
+        acc = x[:, : 8 * nblk].reshape(rows, nblk, 8).cumsum(axis=1)[r, np.maximum(full - 1, 0)]
+        tree = ((acc[:, 0] + acc[:, 1]) + (acc[:, 2] + acc[:, 3])) + (
+            (acc[:, 4] + acc[:, 5]) + (acc[:, 6] + acc[:, 7])
+        )
+        res = np.where(full > 0, tree, 0.0)
+    col = 8 * full[:, None] + np.arange(7)
+    tail = np.where(col < length[:, None], x[r[:, None], np.minimum(col, width - 1)], 0.0)
+    return np.cumsum(np.concatenate([res[:, None], tail], axis=1), axis=1)[:, -1]
+
+
+def _row_dots(x: NDArray[np.float64], v: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``[row @ v for row in x]``, bit for bit.
+
+    A stack of ``(1, n) @ (n, 1)`` products is taken by NumPy's 1-D dot (BLAS ``ddot``) row by
+    row, whereas ``x @ v`` (``gemv``) may add the terms in another order.
+    """
+    return np.matmul(x[:, None, :], v[:, None])[:, 0, 0]
+
+
+def many_degrees(
+    h: NDArray[np.float64], index: NDArray[np.intp]
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    """:func:`direction_degree` of many (histogram, direction) rows at once, bit for bit.
+
+    Parameters
+    ----------
+    h : ndarray, shape (R, N)
+        Non-negative force histograms, one per row; ``N`` divisible by 4 (rows of more than
+        256 bins are passed to :func:`direction_degree` one by one).
+    index : ndarray of int, shape (R,)
+        The direction (bin) of each row.
+
+    Returns
+    -------
+    degree, deviation, effective, contrary : ndarray, shape (R,)
+        The fields of :class:`DirectionDegree` for each row: the same floats as
+        ``direction_degree(h[r], index[r])`` (the same operations in the same order). Pinned
+        by ``test_many_degrees_match_direction_degree_bit_for_bit``.
+
+    Examples
+    --------
+    >>> h = np.zeros((2, 180)); h[:, 75] = 1.0
+    >>> [round(float(x), 4) for x in many_degrees(h, np.array([90, 0]))[0]]
+    [0.6667, 0.0]
+    """
+    h = np.asarray(h, dtype=np.float64)
+    rows, nbins = h.shape
+    n = nbins // 4
+    if 2 * n - 1 > 128:  # longer runs are summed in another order: one row at a time
+        found = [direction_degree(h[r], int(index[r])) for r in range(rows)]
+        d, t, e, q = (
+            np.array([getattr(x, f) for x in found], dtype=np.float64)
+            for f in ("degree", "deviation", "effective", "contrary")
+        )
+        return d, t, e, q
+    c = _constants(nbins)
+    # Every array is C-contiguous (np.take): NumPy sums a row of a C-ordered array in the same
+    # order as a 1-D array, but not always a row of an F-ordered one.
+    g = np.take_along_axis(h, (np.asarray(index)[:, None] + np.arange(nbins)) % nbins, axis=1)
+    # Both sides stacked: rows 0..R-1 the positive side, R..2R-1 the negative side.
+    fav = np.concatenate([np.take(g, c.phis, axis=1), np.take(g, c.neg_phis, axis=1)])
+    fav[:, -1] *= 0.5
+    con = np.concatenate([np.take(g, c.cphi, axis=1), np.take(g, c.neg_cphi, axis=1)])
+    opposite = 0.5 * g[:, 2 * n]
+    moment = _row_dots(con, c.arm) + np.concatenate([opposite, opposite]) * n
+    con_sum = con.sum(axis=1)
+    contrary = (con_sum[:rows] + con_sum[rows:]) + 2.0 * opposite
+    # _cancel_side on both sides of every row (fav is ordered from the pivot inwards).
+    dist = c.dist
+    cum = np.cumsum(fav * dist, axis=1)
+    active = moment > 0.0
+    full = np.where(active, (cum <= moment[:, None]).sum(axis=1), 0)  # searchsorted "right"
+    cancelled = _prefix_sums(fav, full)
+    fav[np.arange(n) < full[:, None]] = 0.0
+    sides = np.arange(2 * rows)
+    at = np.minimum(full, n - 1)
+    left = moment - np.where(full > 0, cum[sides, np.maximum(full - 1, 0)], 0.0)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        part = np.minimum(fav[sides, at], left / dist[at])
+    cut = np.flatnonzero(active & (full < n) & (left > 0.0) & (dist[at] > 0.0))
+    fav[cut, at[cut]] -= part[cut]
+    cancelled[cut] += part[cut]
+    contrary = (contrary + cancelled[:rows]) + cancelled[rows:]
+    fav_pos, fav_neg = fav[:rows], fav[rows:]
+    eff = np.concatenate(
+        [fav_neg[:, :-1], fav_pos[:, -1:] + fav_neg[:, -1:], fav_pos[:, ::-1][:, 1:]], axis=1
+    )
+    total = eff.sum(axis=1)
+    scale = np.maximum(total + contrary, 1e-300)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        tau = _row_dots(eff, c.weight) / c.weight_sum
+        above = np.maximum(eff - tau[:, None], 0.0)
+        mass = above.sum(axis=1)
+        theta = np.where(mass > 0.0, _row_dots(above, c.phi) / mass, _row_dots(eff, c.phi) / total)
+        degree = np.maximum(0.0, 1.0 - np.abs(theta) / (np.pi / 2.0)) * total / (total + contrary)
+    zero = total <= 1e-12 * scale
+    degree = np.where(zero, 0.0, np.minimum(np.maximum(degree, 0.0), 1.0))
+    deviation = np.where(zero, 0.0, theta)
+    return degree, deviation, np.where(zero, np.maximum(total, 0.0), total), contrary
+
+
 def four_degrees(h: NDArray[np.float64]) -> dict[str, DirectionDegree]:
     """Degrees of truth of the four directions (see :data:`DIRECTIONS`).
 

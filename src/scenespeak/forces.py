@@ -407,6 +407,16 @@ def _intersection_area(a: _Region, b: _Region) -> float:
     return max(area, 0.0)
 
 
+def _boxes_apart(
+    lo_a: list[float], hi_a: list[float], lo_b: list[float], hi_b: list[float]
+) -> bool:
+    """:func:`_contact`'s first test (bounding boxes apart), on Python floats: the same
+    operations on the same numbers, without the small-array overhead."""
+    scale = max(max(hi_a[k], hi_b[k]) - min(lo_a[k], lo_b[k]) for k in (0, 1))
+    tol = _LENGTH_TOL * scale
+    return any(lo_a[k] > hi_b[k] + tol or lo_b[k] > hi_a[k] + tol for k in (0, 1))
+
+
 def _contact(a: _Region, b: _Region) -> tuple[float, bool]:
     """Return (area of A∩B, whether the boundaries touch or cross)."""
     lo_a, hi_a = a.start.min(axis=0), a.start.max(axis=0)
@@ -557,6 +567,20 @@ def _pairs(a: _Region, b: _Region, c: FloatArray, s: FloatArray) -> _Pairs:
     sv = (pts @ np.concatenate([np.stack([c, s]), np.stack([-s, c])], axis=1)).T
     s_all = sv[:n_dir]  # (D, N): position along u = (cos, sin)
     v_all = sv[n_dir:]  # position across, along n = (-sin, cos)
+    # Directions in which no line meets both objects (A's range of v strictly below or above
+    # B's) have no pair at all: every A-vertex comes before every B-vertex in the order, or
+    # after. Leaving them out changes nothing else: the other rows, their pairs and the
+    # pairs' order are the same.
+    v_a, v_b = v_all[:, :n], v_all[:, n:]
+    apart = (v_a.max(axis=1) < v_b.min(axis=1)) | (v_b.max(axis=1) < v_a.min(axis=1))
+    kept: NDArray[np.intp] | None = None
+    if apart.any():
+        kept = np.flatnonzero(~apart)
+        if kept.size == 0:
+            none = np.zeros(0, dtype=np.intp)
+            return _Pairs(a=none, b=none, direction=none, attrs=np.zeros((5, 0)))
+        s_all, v_all = s_all[kept], v_all[kept]
+        n_dir = kept.size
     v1 = v_all[:, nxt]
     s1 = s_all[:, nxt]
     down = v1 < v_all
@@ -615,7 +639,13 @@ def _pairs(a: _Region, b: _Region, c: FloatArray, s: FloatArray) -> _Pairs:
     case1 = rows < n_dir * n
     ia = np.where(case1, first, other)
     ib = np.where(case1, other, first)
-    return _Pairs(a=ia, b=ib, direction=ia // width, attrs=attrs.reshape(5, -1))
+    direction = ia // width
+    return _Pairs(
+        a=ia,
+        b=ib,
+        direction=direction if kept is None else kept[direction],
+        attrs=attrs.reshape(5, -1),
+    )
 
 
 def _edge_pair_histograms(
@@ -643,38 +673,191 @@ def _edge_pair_histograms(
             # Next block: about _BLOCK_PAIRS pairs, judging by this one.
             per_row = max(len(pairs.a), 1) / (rows.stop - rows.start)
             block = max(1, min(int(_BLOCK_PAIRS / per_row), 4 * first_block))
-            lo_a, hi_a, s_a, k_a, sg_a = np.take(pairs.attrs, pairs.a, axis=1)
-            lo_b, hi_b, s_b, k_b, sg_b = np.take(pairs.attrs, pairs.b, axis=1)
-            lo = np.maximum(lo_a, lo_b)
-            hi = np.minimum(hi_a, hi_b)
-            d0 = (s_a + k_a * (lo - lo_a)) - (s_b + k_b * (lo - lo_b))
-            d1 = (s_a + k_a * (hi - lo_a)) - (s_b + k_b * (hi - lo_b))
-            # A-edges count + where they leave A (exit), B-edges + where they enter B.
-            weight = (sg_a * sg_b) * np.minimum(lo - hi, 0.0)
-            # A pair serves direction θ where d > 0 and θ + π where d < 0 (bin + n_rows). A
-            # pair whose gap changes sign is split at the zero into one part for each.
             n_rows = rows.stop - rows.start
-            bins = pairs.direction + n_rows * ((d0 + d1) < 0)
-            g0, g1 = np.abs(d0), np.abs(d1)
-            cross = np.flatnonzero(d0 * d1 < 0)
-            if cross.size:
-                c0, c1, cw = d0[cross], d1[cross], weight[cross]
-                frac = np.maximum(c0, c1) / (np.abs(c0) + np.abs(c1))
-                g0[cross] = 0.0
-                g1[cross] = np.maximum(c0, c1)
-                weight[cross] = cw * frac
-                bins[cross] = pairs.direction[cross]
-                g0 = np.concatenate([g0, np.zeros(cross.size)])
-                g1 = np.concatenate([g1, -np.minimum(c0, c1)])
-                weight = np.concatenate([weight, cw * (1.0 - frac)])
-                bins = np.concatenate([bins, pairs.direction[cross] + n_rows])
-            for i, kernel in enumerate(kernels):
-                values = np.bincount(
-                    bins, weights=weight * _mean_phi(kernel, g0, g1), minlength=2 * n_rows
-                )
+            for i, values in enumerate(_bin_values(pairs, kernels, n_rows, 2 * n_rows)):
                 out[i, rows] = values[:n_rows]
                 if half < directions:
                     out[i, rows.start + half : rows.stop + half] = values[n_rows:]
+    return out
+
+
+def _bin_values(
+    pairs: _Pairs, kernels: list[_Kernel], n_rows: int, n_bins: int
+) -> list[FloatArray]:
+    """Sum every edge pair's force into its bin, for each kernel (arrays of ``n_bins``).
+
+    A pair's bin is ``pairs.direction`` where the gap ``d = s_A - s_B`` is positive and
+    ``pairs.direction + n_rows`` (the opposite direction) where it is negative.
+    """
+    lo_a, hi_a, s_a, k_a, sg_a = np.take(pairs.attrs, pairs.a, axis=1)
+    lo_b, hi_b, s_b, k_b, sg_b = np.take(pairs.attrs, pairs.b, axis=1)
+    lo = np.maximum(lo_a, lo_b)
+    hi = np.minimum(hi_a, hi_b)
+    d0 = (s_a + k_a * (lo - lo_a)) - (s_b + k_b * (lo - lo_b))
+    d1 = (s_a + k_a * (hi - lo_a)) - (s_b + k_b * (hi - lo_b))
+    # A-edges count + where they leave A (exit), B-edges + where they enter B.
+    weight = (sg_a * sg_b) * np.minimum(lo - hi, 0.0)
+    # A pair serves direction θ where d > 0 and θ + π where d < 0 (bin + n_rows). A pair
+    # whose gap changes sign is split at the zero into one part for each.
+    bins = pairs.direction + n_rows * ((d0 + d1) < 0)
+    g0, g1 = np.abs(d0), np.abs(d1)
+    cross = np.flatnonzero(d0 * d1 < 0)
+    if cross.size:
+        c0, c1, cw = d0[cross], d1[cross], weight[cross]
+        frac = np.maximum(c0, c1) / (np.abs(c0) + np.abs(c1))
+        g0[cross] = 0.0
+        g1[cross] = np.maximum(c0, c1)
+        weight[cross] = cw * frac
+        bins[cross] = pairs.direction[cross]
+        g0 = np.concatenate([g0, np.zeros(cross.size)])
+        g1 = np.concatenate([g1, -np.minimum(c0, c1)])
+        weight = np.concatenate([weight, cw * (1.0 - frac)])
+        bins = np.concatenate([bins, pairs.direction[cross] + n_rows])
+    return [
+        np.bincount(bins, weights=weight * _mean_phi(kernel, g0, g1), minlength=n_bins)
+        for kernel in kernels
+    ]
+
+
+def _many_pairs(items: Sequence[tuple[_Region, _Region]], c: FloatArray, s: FloatArray) -> _Pairs:
+    """:func:`_pairs` of several pairs of regions at once, for the same directions (c, s).
+
+    Each pair's vertices are projected and sorted exactly as :func:`_pairs` does (the same
+    products, the same argsort of the same rows); the rows of all pairs then go through the
+    cumulative counts together, laid end to end (row ``r`` of pair ``p`` is one run of
+    ``n_p + m_p`` entries). ``direction`` is ``2 * len(c) * p + d`` for direction row ``d`` of
+    pair ``p``. Restricted to one pair, the pairs found and their order are those of
+    :func:`_pairs`, so binned sums are the same floats.
+    """
+    n_dir = len(c)
+    dirs = np.concatenate([np.stack([c, s]), np.stack([-s, c])], axis=1)
+    # Rows where the objects' ranges of v are apart have no pair (see _pairs). Here the ranges
+    # come from each region's own vertices, once per region, and a row is left out only when
+    # they are apart by more than 1e-9 times the coordinates' size: the pair's own positions
+    # (taken from a shifted origin) differ from these by a few ulps of that size, so such a
+    # row is apart in them too. A row kept although apart finds no pair either.
+    extent: dict[int, tuple[FloatArray, FloatArray, float]] = {}
+    for a, b in items:
+        for r in (a, b):
+            if id(r) not in extent:
+                v = r.start @ dirs[:, n_dir:]
+                extent[id(r)] = (v.min(axis=0), v.max(axis=0), float(np.abs(r.start).max()))
+    lo_a, hi_a, size_a = zip(*(extent[id(a)] for a, _ in items), strict=True)
+    lo_b, hi_b, size_b = zip(*(extent[id(b)] for _, b in items), strict=True)
+    margin = 1e-9 * np.maximum(size_a, size_b)[:, None]
+    apart_all = (np.stack(hi_a) < np.stack(lo_b) - margin) | (
+        np.stack(hi_b) < np.stack(lo_a) - margin
+    )
+    vs, ss, orders, rows_kept, direction = [], [], [], [], []
+    widths, firsts, nxt_local, prv_local = [], [], [], []
+    for k, (a, b) in enumerate(items):
+        kept = np.flatnonzero(~apart_all[k])
+        if kept.size == 0:
+            continue
+        n, m = len(a.start), len(b.start)
+        centre = 0.5 * (a.start[0] + b.start[0])
+        sv = ((np.concatenate([a.start, b.start]) - centre) @ dirs).T
+        s_all = sv[:n_dir]
+        v_all = sv[n_dir:]
+        if kept.size < n_dir:
+            s_all, v_all = s_all[kept], v_all[kept]
+        vs.append(v_all.ravel())
+        ss.append(s_all.ravel())
+        orders.append(np.argsort(v_all, axis=1).ravel())
+        direction.append(2 * n_dir * k + kept)
+        rows_kept.append(kept.size)
+        widths.append(n + m)
+        firsts.append(n)
+        nxt_local.append(np.concatenate([a.nxt, b.nxt + n]))
+        prv_local.append(np.concatenate([a.prv, b.prv + n]))
+    if not vs:
+        none = np.zeros(0, dtype=np.intp)
+        return _Pairs(a=none, b=none, direction=none, attrs=np.zeros((5, 0)))
+    # Entry e is column col[e] of a row that starts at entry row0[e]; its pair's vertex tables
+    # (concatenated over the pairs) start at table0[e].
+    row_width = np.repeat(widths, rows_kept)
+    row_start = np.cumsum(row_width) - row_width
+    base = int(row_width.sum())
+    row0 = np.repeat(row_start, row_width)
+    col = np.arange(base) - row0
+    table_start = np.cumsum(widths) - widths
+    table = np.repeat(table_start, rows_kept)
+    table0 = np.repeat(table, row_width) + col
+    v_all, s_all = np.concatenate(vs), np.concatenate(ss)
+    nxt = row0 + np.concatenate(nxt_local)[table0]
+    prv = row0 + np.concatenate(prv_local)[table0]
+    order = row0 + np.concatenate(orders)
+    b_vertex = col >= np.repeat(np.repeat(firsts, rows_kept), row_width)
+    entry_direction = np.repeat(np.concatenate(direction), row_width)
+    idx = np.arange(base)
+    v1 = v_all[nxt]
+    s1 = s_all[nxt]
+    down = v1 < v_all
+    low = idx + down * (nxt - idx)
+    attrs = np.empty((5, base))
+    np.minimum(v_all, v1, out=attrs[0])
+    np.maximum(v_all, v1, out=attrs[1])
+    np.copyto(attrs[2], s_all)
+    np.copyto(attrs[2], s1, where=down)
+    dv = v1 - v_all
+    np.divide(s1 - s_all, np.where(dv != 0, dv, np.inf), out=attrs[3])
+    np.sign(dv, out=attrs[4])
+    starts_low = ~down
+    incoming_low = down[prv]
+    mult = starts_low.astype(np.intp) + incoming_low
+    second = starts_low & incoming_low
+    ms = mult[order]
+    ma = np.where(b_vertex[order], 0, ms)
+    mb = ms - ma
+    cnt_a = np.empty(base, dtype=np.intp)
+    cnt_b = np.empty(base, dtype=np.intp)
+    cnt_a[order] = np.cumsum(ma) - ma
+    cnt_b[order] = np.cumsum(mb) - mb
+    high = nxt + idx - low
+    edges_a = np.flatnonzero(~b_vertex)
+    edges_b = np.flatnonzero(b_vertex)
+    low_a, low_b = low[edges_a], low[edges_b]
+    a_block = edges_b.size  # by_lo holds B's edges, then A's
+    by_lo = np.empty(base, dtype=np.intp)
+    by_lo[cnt_b[low_b] + second[edges_b]] = edges_b
+    by_lo[cnt_a[low_a] + (second[edges_a] + a_block)] = edges_a
+    start = np.concatenate([cnt_b[low_a], cnt_a[low_b] + a_block])
+    end = np.concatenate([cnt_b[high[edges_a]], cnt_a[high[edges_b]] + a_block])
+    rows, pos = _expand(start, end)
+    first = np.concatenate([edges_a, edges_b])[rows]
+    other = by_lo[pos]
+    case1 = rows < edges_a.size
+    ia = np.where(case1, first, other)
+    ib = np.where(case1, other, first)
+    return _Pairs(a=ia, b=ib, direction=entry_direction[ia], attrs=attrs)
+
+
+def _many_f0_f2(items: Sequence[tuple[_Region, _Region]], directions: int) -> FloatArray:
+    """``_edge_pair_histograms(a, b, [F0, F2], directions)`` of several pairs, one sweep.
+
+    Returns an array of shape ``(len(items), 2, directions)``, each pair's the same floats as
+    its own sweep. Pairs too large for a single block, or an odd number of directions, are
+    swept one by one.
+    """
+    kernels = [_Kernel(0.0), _Kernel(2.0)]
+    out = np.empty((len(items), 2, directions))
+    half = directions // 2
+    batch = [
+        k
+        for k, (a, b) in enumerate(items)
+        if directions % 2 == 0 and half * (len(a.start) + len(b.start)) <= 4 * _BLOCK
+    ]
+    single = set(range(len(items))) - set(batch)
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        if batch:
+            theta = 2.0 * np.pi * np.arange(half) / directions
+            cos, sin = np.cos(theta), np.sin(theta)
+            pairs = _many_pairs([items[k] for k in batch], cos, sin)
+            values = _bin_values(pairs, kernels, half, 2 * half * len(batch))
+            for i, v in enumerate(values):
+                out[batch, i] = v.reshape(len(batch), directions)
+    for k in sorted(single):
+        out[k] = _edge_pair_histograms(*items[k], kernels, directions)
     return out
 
 
@@ -897,6 +1080,81 @@ def hybrid_histogram(
     if y0 <= 0:
         raise InputError("p0/p1", "Y0 = max(p0*D_min, p1*D_AB) is 0: give p0 > 0")
     return _edge_pair_histograms(a, b, [_Kernel(2.0, y0)], directions)[0]
+
+
+def _f0_and_f2(
+    a: _Region,
+    b: _Region,
+    directions: int,
+    *,
+    try_f2: bool = True,
+    contact: tuple[float, bool] | None = None,
+) -> tuple[FloatArray, FloatArray, bool]:
+    """F0 and F2 of two prepared regions, or F0 and the hybrid F02 where F2 is undefined.
+
+    For regions made once per object (``_polygon_region``) and used in many pairs: the same
+    values as ``force_histograms(A, B, (0, 2))`` when that succeeds and gives a finite F2
+    (and ``try_f2``), else ``force_histogram(A, B, r=0)`` and ``hybrid_histogram(A, B)``, but
+    with one ``_contact`` and one sweep for both kernels (the kernels share the edge pairs and
+    are summed separately, so each result is the one of its own sweep, bit for bit).
+
+    ``contact`` is ``_contact(a, b)`` when already known.
+
+    Returns
+    -------
+    f0, f2, hybrid
+        ``f2`` is F02 when ``hybrid``.
+    """
+    inter, touch = _contact(a, b) if contact is None else contact
+    if try_f2 and not inter > 0 and not touch:  # what _check_defined(a, b, 2.0) lets through
+        try:
+            f0, f2 = _edge_pair_histograms(a, b, [_Kernel(0.0), _Kernel(2.0)], directions)
+            if np.all(np.isfinite(f2)):
+                return f0, f2, False
+        except (ValueError, ArithmeticError):
+            pass
+    d_min = 2.0 * math.sqrt(min(a.area, b.area) / math.pi)
+    d_int = 2.0 * math.sqrt(inter / math.pi)
+    y0 = max(0.01 * d_min, 3.0 * d_int)  # hybrid_histogram's defaults p0 = 0.01, p1 = 3
+    if y0 <= 0:
+        raise InputError("p0/p1", "Y0 = max(p0*D_min, p1*D_AB) is 0: give p0 > 0")
+    f0, f02 = _edge_pair_histograms(a, b, [_Kernel(0.0), _Kernel(2.0, y0)], directions)
+    return f0, f02, True
+
+
+def _many_f0_and_f2(
+    items: Sequence[tuple[_Region, _Region, bool]], directions: int
+) -> list[tuple[FloatArray, FloatArray, bool]]:
+    """:func:`_f0_and_f2` of several pairs ``(a, b, try_f2)``: the pairs where F2 is tried
+    share one sweep (:func:`_many_f0_f2`); the same results, pair by pair."""
+    boxes: dict[int, tuple[list[float], list[float]]] = {}
+    for a, b, _ in items:
+        for r in (a, b):
+            if id(r) not in boxes:
+                boxes[id(r)] = (r.start.min(axis=0).tolist(), r.start.max(axis=0).tolist())
+    contacts = [
+        (0.0, False) if _boxes_apart(*boxes[id(a)], *boxes[id(b)]) else _contact(a, b)
+        for a, b, _ in items
+    ]
+    tried = [
+        k
+        for k, ((_, _, try_f2), (inter, touch)) in enumerate(zip(items, contacts, strict=True))
+        if try_f2 and not inter > 0 and not touch
+    ]
+    found: dict[int, tuple[FloatArray, FloatArray, bool]] = {}
+    if tried:
+        try:
+            swept = _many_f0_f2([items[k][:2] for k in tried], directions)
+        except (ValueError, ArithmeticError):
+            swept = None
+        if swept is not None:
+            for k, (f0, f2) in zip(tried, swept, strict=True):
+                if np.all(np.isfinite(f2)):
+                    found[k] = (f0, f2, False)
+    return [
+        found[k] if k in found else _f0_and_f2(a, b, directions, try_f2=try_f2, contact=contacts[k])
+        for k, (a, b, try_f2) in enumerate(items)
+    ]
 
 
 def polygon_area(polygon: ArrayLike) -> float:

@@ -31,6 +31,7 @@ Directions follow ``interfaces.md``: angle 0 = right, 90° = behind (farther fro
 from __future__ import annotations
 
 import argparse
+import functools
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, fields
@@ -39,8 +40,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from scenespeak._language_degrees import DIRECTIONS, DirectionDegree, four_degrees
-from scenespeak._language_geometry import as_polygon, intersection_area, polygon_area
+from scenespeak._language_degrees import DIRECTIONS, DirectionDegree, four_degrees, many_degrees
+from scenespeak._language_geometry import as_polygon, intersection_area, is_convex, polygon_area
 from scenespeak.errors import InputError, ScenespeakError
 
 __all__ = [
@@ -57,6 +58,7 @@ __all__ = [
     "layout_table",
     "pair_histograms",
     "relate",
+    "relate_objects",
     "relation_of_pair",
     "relations_of_pair",
     "summarize_scene",
@@ -404,13 +406,32 @@ def _as_histogram(h: ArrayLike, name: str) -> NDArray[np.float64]:
     return np.maximum(a, 0.0)
 
 
+def _as_histograms(
+    histograms: Sequence[NDArray[np.float64]], names: tuple[str, ...]
+) -> list[NDArray[np.float64]]:
+    """``[_as_histogram(h, names[k % len(names)]) for k, h in enumerate(histograms)]`` for
+    float64 histograms of one length: the checks and the clipping at 0 done on all rows at
+    once (the same values; the first bad one raises the same error)."""
+    if not histograms:
+        return []
+    stack = np.stack(histograms)
+    size = stack.shape[1]
+    ok = size >= 8 and size % 4 == 0 and bool(np.isfinite(stack).all())
+    if ok:
+        floor = -1e-9 * np.maximum(np.abs(stack).max(axis=1), 1e-300)
+        ok = not bool(np.any(stack < floor[:, None]))
+    if not ok:
+        return [_as_histogram(h, names[k % len(names)]) for k, h in enumerate(histograms)]
+    return list(np.maximum(stack, 0.0))
+
+
 def _coverage(f0: NDArray[np.float64], t: Thresholds) -> float:
     nbins = f0.size
     if float(f0.max()) <= 0.0:
         return 0.0
     k = round(t.coverage_smooth_deg / (360.0 / nbins))
     if k > 0:
-        kernel = np.ones(2 * k + 1) / (2 * k + 1)
+        kernel = _box_kernel(k)
         padded = np.concatenate([f0[-k:], f0, f0[:k]])
         smooth = np.convolve(padded, kernel, mode="valid")
     else:
@@ -418,16 +439,30 @@ def _coverage(f0: NDArray[np.float64], t: Thresholds) -> float:
     return float(np.mean(smooth >= t.coverage_level * smooth.max()))
 
 
+@functools.lru_cache(maxsize=16)
+def _box_kernel(k: int) -> NDArray[np.float64]:
+    """The moving average of ``2k + 1`` bins (read-only, computed once per ``k``)."""
+    kernel = np.ones(2 * k + 1) / (2 * k + 1)
+    kernel.setflags(write=False)
+    return kernel
+
+
+@functools.lru_cache(maxsize=64)
+def _sector_weights(nbins: int, direction: str) -> NDArray[np.float64]:
+    """Weights of :func:`_sector_share` (read-only, computed once per size and direction)."""
+    ang = np.arange(nbins) * 360.0 / nbins
+    off = np.abs((ang - _ANGLE_DEG[direction] + 180.0) % 360.0 - 180.0)
+    w = np.where(off < 45.0 - 1e-9, 1.0, np.where(off <= 45.0 + 1e-9, 0.5, 0.0))
+    w.setflags(write=False)
+    return w
+
+
 def _sector_share(f0: NDArray[np.float64], direction: str) -> float:
     """Share of F0's mass within 45° of ``direction`` (bins exactly at 45° count half)."""
     total = float(f0.sum())
     if total <= 0.0:
         return 0.0
-    nbins = f0.size
-    ang = np.arange(nbins) * 360.0 / nbins
-    off = np.abs((ang - _ANGLE_DEG[direction] + 180.0) % 360.0 - 180.0)
-    w = np.where(off < 45.0 - 1e-9, 1.0, np.where(off <= 45.0 + 1e-9, 0.5, 0.0))
-    return float(w @ f0 / total)
+    return float(_sector_weights(f0.size, direction) @ f0 / total)
 
 
 def _neighbours(direction: str) -> tuple[str, str]:
@@ -456,11 +491,13 @@ def _decide(
     t: Thresholds,
     overlap: float | None,
     referent_overlap: float | None,
+    coverage: float | None = None,
 ) -> _Decision:
     a0 = {d: deg0[d].degree for d in DIRECTIONS}
     a2 = {d: deg2[d].degree for d in DIRECTIONS}
     a = {d: 0.5 * (a0[d] + a2[d]) for d in DIRECTIONS}
-    coverage = _coverage(f0, t)
+    if coverage is None:
+        coverage = _coverage(f0, t)
     best = max(a.values())
     primary = max(DIRECTIONS, key=lambda d: a[d])  # ties: first in DIRECTIONS order
     deviation = deg2[primary].deviation
@@ -668,9 +705,10 @@ def _relation_from(
     hybrid: bool,
     frame: str,
     degrees: tuple[dict[str, DirectionDegree], dict[str, DirectionDegree]] | None = None,
+    coverage: float | None = None,
 ) -> Relation:
     deg0, deg2 = (four_degrees(h0), four_degrees(h2)) if degrees is None else degrees
-    decision = _decide(deg0, deg2, h0, t, overlap, referent_overlap)
+    decision = _decide(deg0, deg2, h0, t, overlap, referent_overlap, coverage)
     horizontal = _render(decision, argument, referent, frame)
     sentence = _render(decision, argument, referent, frame, vertical)
     a0 = {d: deg0[d].degree for d in DIRECTIONS}
@@ -861,8 +899,8 @@ class PairHistograms:
         """
         half = self.f0.size // 2
         return PairHistograms(
-            np.roll(self.f0, half),
-            np.roll(self.f2, half),
+            np.concatenate([self.f0[-half:], self.f0[:-half]]) if half else self.f0.copy(),
+            np.concatenate([self.f2[-half:], self.f2[:-half]]) if half else self.f2.copy(),
             self.hybrid,
             self.intersection,
             self.area_b,
@@ -952,10 +990,16 @@ def _describe_pair(
     b_heights: ArrayLike | None,
     t: Thresholds,
     degrees: tuple[dict[str, DirectionDegree], dict[str, DirectionDegree]] | None = None,
+    heights_checked: bool = False,
+    coverage: float | None = None,
 ) -> Relation:
-    """The rule base on one ordered pair (labels and heights already checked)."""
+    """The rule base on one ordered pair (labels checked; heights too if ``heights_checked``:
+    then a pair whose footprints hardly overlap skips :func:`vertical_relation`, which would
+    only check the heights again and return None). ``coverage`` is ``_coverage(pair.f0)``
+    when known."""
     vertical = None
-    if a_heights is not None and b_heights is not None:
+    skip = heights_checked and pair.horizontal_overlap < t.vertical_overlap
+    if a_heights is not None and b_heights is not None and not skip:
         vertical = vertical_relation(
             a_heights, b_heights, horizontal_overlap=pair.horizontal_overlap, thresholds=t
         )
@@ -971,6 +1015,7 @@ def _describe_pair(
         hybrid=pair.hybrid,
         frame="object",
         degrees=degrees,
+        coverage=coverage,
     )
 
 
@@ -1008,16 +1053,191 @@ def relations_of_pair(
         raise InputError("a_heights/b_heights", "give the heights of both objects, or neither")
     if pair.f0.size % 4 or pair.f0.size < 8 or pair.f2.size != pair.f0.size:
         raise InputError("pair", "histograms must have one length, a multiple of 4 (>= 8)")
-    deg0, deg2 = four_degrees(pair.f0), four_degrees(pair.f2)
+    ((deg0, deg2),) = _pair_degrees([pair])
+    ab, ba, _ = _both_ways(pair, argument, referent, a_heights, b_heights, t, deg0, deg2)
+    return ab, ba
+
+
+def _pair_degrees(
+    pairs: Sequence[PairHistograms],
+) -> list[tuple[dict[str, DirectionDegree], dict[str, DirectionDegree]]]:
+    """``(four_degrees(p.f0), four_degrees(p.f2))`` of every pair: one batch, the same values.
+
+    All pairs must have histograms of one length (a multiple of 4).
+    """
+    if not pairs:
+        return []
+    nbins = pairs[0].f0.size
+    hist = np.stack([h for p in pairs for h in (p.f0, p.f2)])
+    rows = np.repeat(np.arange(len(hist)), 4)
+    found = many_degrees(hist[rows], np.tile(np.arange(4) * (nbins // 4), len(hist)))
+    values = np.column_stack(found).tolist()  # Python floats, row by row
+    out = []
+    for k in range(len(pairs)):
+        deg = [
+            {name: DirectionDegree(*values[8 * k + 4 * f + i]) for i, name in enumerate(DIRECTIONS)}
+            for f in (0, 1)
+        ]
+        out.append((deg[0], deg[1]))
+    return out
+
+
+def _both_ways(
+    pair: PairHistograms,
+    argument: str,
+    referent: str,
+    a_heights: ArrayLike | None,
+    b_heights: ArrayLike | None,
+    t: Thresholds,
+    deg0: dict[str, DirectionDegree],
+    deg2: dict[str, DirectionDegree],
+    heights_checked: bool = False,
+) -> tuple[Relation, Relation, PairHistograms]:
+    """The rule base on a pair and on its reverse (B's degree for "left" is A's for "right").
+
+    Returns the two relations and ``pair.reversed()``.
+    """
     back = pair.reversed()
     reversed_degrees = (
         {d: deg0[_OPPOSITE[d]] for d in DIRECTIONS},
         {d: deg2[_OPPOSITE[d]] for d in DIRECTIONS},
     )
-    return (
-        _describe_pair(pair, argument, referent, a_heights, b_heights, t, (deg0, deg2)),
-        _describe_pair(back, referent, argument, b_heights, a_heights, t, reversed_degrees),
+    # The coverage of F0 turned by 180° is the same: the circular moving average turns with
+    # it (each smoothed bin is the same dot product of the same numbers), the count is equal.
+    cov = _coverage(pair.f0, t)
+    ab = _describe_pair(
+        pair, argument, referent, a_heights, b_heights, t, (deg0, deg2), heights_checked, cov
     )
+    ba = _describe_pair(
+        back, referent, argument, b_heights, a_heights, t, reversed_degrees, heights_checked, cov
+    )
+    return ab, ba, back
+
+
+def relate_objects(
+    hulls: Sequence[ArrayLike],
+    *,
+    names: Sequence[str],
+    heights: Sequence[ArrayLike] | None = None,
+    directions: int = 180,
+    thresholds: Thresholds | None = None,
+) -> list[tuple[Relation, PairHistograms]]:
+    """Every ordered pair of a scene's objects: the relation and the histograms behind it.
+
+    The same relations and histograms as, for every unordered pair ``i < j``,
+    ``pair = pair_histograms(hulls[i], hulls[j])``, ``relations_of_pair(pair, ...)`` and
+    ``pair.reversed()``, but each polygon is validated and prepared once (not once per pair),
+    disjoint hulls skip the clipping, F0 and F2 (or F0 and F02) come from one sweep, and the
+    degrees of truth of all pairs are computed together. The results are the same floats.
+
+    Parameters
+    ----------
+    hulls : sequence of array_like, shape (N, 2)
+        The objects' footprints on the horizontal plane (the 2-D frame of ``interfaces.md``,
+        metres).
+    names : sequence of str
+        Their labels, one per hull.
+    heights : sequence of array_like, optional
+        Each object's heights (metres, larger = higher) along up, for the vertical relations;
+        one per hull, or None for no vertical relations.
+    directions : int
+        Histogram bins (a multiple of 4, >= 8).
+    thresholds : Thresholds, optional
+
+    Returns
+    -------
+    list of (Relation, PairHistograms)
+        One entry per ordered pair ``(i, j)``, ``i != j``, in the order ``(0, 1), (0, 2), ...,
+        (1, 0), (1, 2), ...``: the relation of object ``i`` (argument) to object ``j``
+        (referent) and the histograms of ``i`` relative to ``j``.
+
+    Raises
+    ------
+    InputError
+        For a hull that is not an ``(N >= 3, 2)`` finite vertex array with an area, labels
+        that are empty or do not match the hulls, heights of the wrong count, or a bad
+        ``directions``.
+
+    Examples
+    --------
+    >>> sq = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
+    >>> out = relate_objects([sq, sq + [3.0, 0.0]], names=["hat", "mug"])
+    >>> [rel.sentence for rel, _ in out]
+    ['The hat is directly to the left of the mug.', 'The mug is directly to the right of the hat.']
+    """
+    from scenespeak import forces
+
+    t = thresholds or DEFAULT_THRESHOLDS
+    labels = [_label(name, "names") for name in names]
+    if len(labels) != len(hulls):
+        raise InputError("names", f"give one label per hull: {len(labels)} for {len(hulls)}")
+    if heights is not None and len(heights) != len(hulls):
+        raise InputError("heights", f"give one array per hull: {len(heights)} for {len(hulls)}")
+    if isinstance(directions, bool) or not isinstance(directions, int | np.integer):
+        raise InputError("directions", f"must be a multiple of 4 and >= 8, got {directions!r}")
+    if directions < 8 or directions % 4:
+        raise InputError("directions", f"must be a multiple of 4 and >= 8, got {directions}")
+    directions = int(directions)
+    polygons = [as_polygon(h, f"{label} hull") for h, label in zip(hulls, labels, strict=True)]
+    checked = (
+        None
+        if heights is None
+        else [_heights(h, f"{label} heights") for h, label in zip(heights, labels, strict=True)]
+    )
+    areas = [abs(polygon_area(p)) for p in polygons]
+    convex = [is_convex(p) for p in polygons]
+    regions: list[Any] = []
+    for p, label in zip(polygons, labels, strict=True):
+        try:
+            regions.append(forces._polygon_region(p, label))
+        except ScenespeakError:
+            regions.append(None)  # its pairs take pair_histograms' path (and its error)
+    n = len(polygons)
+    index = [(i, j) for i in range(n) for j in range(i + 1, n)]
+    inter = [
+        intersection_area(polygons[i], polygons[j], a_convex=convex[i], b_convex=convex[j])
+        for i, j in index
+    ]
+    intersecting = [
+        x > 1e-12 * min(areas[i], areas[j]) for x, (i, j) in zip(inter, index, strict=True)
+    ]
+    # F0 and F2 of all pairs of prepared regions in one sweep (F02 where F2 is undefined).
+    prepared = [
+        k for k, (i, j) in enumerate(index) if regions[i] is not None and regions[j] is not None
+    ]
+    swept = forces._many_f0_and_f2(
+        [(regions[index[k][0]], regions[index[k][1]], not intersecting[k]) for k in prepared],
+        directions,
+    )
+    histograms = dict(zip(prepared, swept, strict=True))
+    pairs: list[PairHistograms] = []
+    for k, (i, j) in enumerate(index):
+        if k in histograms:
+            f0, f2, hybrid = histograms[k]
+        else:
+            f0, f2, hybrid = _histograms(polygons[i], polygons[j], directions, intersecting[k])
+        pairs.append(PairHistograms(f0, f2, hybrid, inter[k], areas[i], areas[j]))
+    # pair_histograms' checks (_as_histogram) of every f0 and f2, in one go.
+    checked_hist = _as_histograms([h for p in pairs for h in (p.f0, p.f2)], ("f0", "f2"))
+    pairs = [
+        PairHistograms(
+            checked_hist[2 * k],
+            checked_hist[2 * k + 1],
+            p.hybrid,
+            p.intersection,
+            p.area_a,
+            p.area_b,
+        )
+        for k, p in enumerate(pairs)
+    ]
+    found: dict[tuple[int, int], tuple[Relation, PairHistograms]] = {}
+    for (i, j), pair, (deg0, deg2) in zip(index, pairs, _pair_degrees(pairs), strict=True):
+        hi = checked[i] if checked is not None else None
+        hj = checked[j] if checked is not None else None
+        ab, ba, back = _both_ways(pair, labels[i], labels[j], hi, hj, t, deg0, deg2, True)
+        found[i, j] = (ab, pair)
+        found[j, i] = (ba, back)
+    return [found[i, j] for i in range(n) for j in range(n) if i != j]
 
 
 def relate(

@@ -318,29 +318,20 @@ def _points_inside(xy: NDArray[np.float64], mask: NDArray[np.bool_]) -> NDArray[
 def _relate_all(objects: tuple[SceneObject, ...], directions: int) -> list[PairRelation]:
     """Every ordered pair through the force histograms and the rule base.
 
-    Each unordered pair is computed once (:func:`scenespeak.language.pair_histograms`: F0 and
-    F2 in one sweep, or the hybrid F02 where the hulls touch) and described both ways
-    (:func:`scenespeak.language.relations_of_pair`: F(B, A) is F(A, B) turned by 180°, so the
-    degrees of truth are computed once), with the heights along up for the vertical relations.
+    :func:`scenespeak.language.relate_objects` prepares each hull once, computes each
+    unordered pair's F0 and F2 (or the hybrid F02 where the hulls touch) in one sweep over all
+    pairs and describes both orderings (F(B, A) is F(A, B) turned by 180°), with the heights
+    along up for the vertical relations.
     """
-    from scenespeak.language import pair_histograms, relations_of_pair
+    from scenespeak.language import relate_objects
 
-    relations: list[PairRelation] = []
-    n = len(objects)
-    for i in range(n):
-        for j in range(i + 1, n):
-            a, b = objects[i], objects[j]
-            pair = pair_histograms(a.hull, b.hull, directions=directions)
-            ab, ba = relations_of_pair(
-                pair,
-                argument=a.label,
-                referent=b.label,
-                a_heights=a.heights,
-                b_heights=b.heights,
-            )
-            back = pair.reversed()
-            relations.append(PairRelation(ab, pair.f0, pair.f2))
-            relations.append(PairRelation(ba, back.f0, back.f2))
+    found = relate_objects(
+        [o.hull for o in objects],
+        names=[o.label for o in objects],
+        heights=[o.heights for o in objects],
+        directions=directions,
+    )
+    relations = [PairRelation(rel, hist.f0, hist.f2) for rel, hist in found]
     order = {o.label: k for k, o in enumerate(objects)}
     relations.sort(key=lambda r: (order[r.argument], order[r.referent]))
     return relations
