@@ -295,6 +295,12 @@ def _topk_rows(d: NDArray[np.float32], k: int) -> NDArray[np.intp]:
     return np.take_along_axis(part, order, axis=1)
 
 
+def _runs(values: list[int]) -> tuple[list[int], list[int]]:
+    """Starts and ends of the runs of equal consecutive values."""
+    starts = [i for i in range(len(values)) if i == 0 or values[i] != values[i - 1]]
+    return starts, [*starts[1:], len(values)] if values else []
+
+
 def _sqnorms(data: NDArray[np.uint8], chunk: int = 8192) -> NDArray[np.float32]:
     out = np.empty(data.shape[0], np.float32)
     for s in range(0, data.shape[0], chunk):
@@ -600,6 +606,11 @@ class IVFIndex(_IndexBuilder):
             + self.centroids.nbytes
         )
 
+    #: Largest table of candidate distances, in float32 entries (``(query, probe)`` pairs ×
+    #: largest visited cell), filled cell by cell and read once at the end; above it each
+    #: cell's nearest are read out as the cell is visited.
+    table_limit = 1 << 21
+
     def search(
         self, query: NDArray[np.uint8], k: int
     ) -> tuple[NDArray[np.float32], NDArray[np.int64]]:
@@ -634,23 +645,157 @@ class IVFIndex(_IndexBuilder):
                 cd[rows, probes[:, j]] = np.inf
         else:
             probes = np.argpartition(cd, nprobe - 1, axis=1)[:, :nprobe]
+        out_d, out_i = self._scan_cells(qm2, probes, k)
+        out_d += qn[:, None]
+        np.maximum(out_d, 0.0, out=out_d)
+        return out_d, out_i
+
+    def _scan_cells(
+        self, qm2: NDArray[np.float32], probes: NDArray[np.intp], k: int
+    ) -> tuple[NDArray[np.float32], NDArray[np.int64]]:
+        """Each probed cell's ``k`` nearest per query, merged into each query's ``k`` nearest.
+
+        Returns ``-2 q·b + |b|²`` (without ``|q|²``, ``inf`` where missing) and the ids
+        (``-1`` where missing), nearest first.
+        """
+        nq, nprobe = probes.shape
         # Candidates per (query, probe) pair, in the order the pairs are visited (grouped by
-        # cell), so that each cell writes one contiguous block of rows.
+        # cell), so that each cell writes one contiguous block of rows. For the small table,
+        # cells of the same size come next to each other (for _scan_table's partitions); the
+        # pairs of one cell stay in query order either way.
         flat = probes.ravel()
-        order = np.argsort(flat, kind="stable")
+        size_of = np.diff(self._offsets)[flat]
+        width = int(size_of.max())
+        table = flat.size * (width + 1) <= self.table_limit
+        order = np.argsort(size_of * self.nlist + flat if table else flat, kind="stable")
         lists = flat[order]
         qidx = order // nprobe
-        pair_d = np.full((flat.size, k), np.inf, np.float32)
-        pair_i = np.full((flat.size, k), -1, np.int64)
         bounds = np.flatnonzero(np.diff(lists)) + 1
         starts = np.concatenate([[0], bounds])
         ends = np.concatenate([bounds, [lists.size]])
-        work = list(zip(starts.tolist(), ends.tolist(), strict=True))
+        cells = lists[starts]
+        # (first pair, end pair, first member, end member) of each visited cell
+        work = list(
+            zip(
+                starts.tolist(),
+                ends.tolist(),
+                self._offsets[cells].tolist(),
+                self._offsets[cells + 1].tolist(),
+                strict=True,
+            )
+        )
+        if table:
+            # The queries in visiting order, with a column of ones: against a cell's block
+            # with its squared norms as a 129th column, one GEMM gives ``-2 q·b + |b|²``.
+            qa = np.empty((flat.size, _DIM + 1), np.float32)
+            qa[:, :_DIM] = qm2[qidx]
+            qa[:, _DIM] = 1.0
+            # Most cells visited (a large batch of queries): convert them all in one go.
+            visited = int(np.diff(self._offsets)[cells].sum())
+            whole = 2 * visited >= self.ntotal and self.ntotal * (_DIM + 1) <= self.table_limit
+            pair_d, pair_i = self._scan_table(qa, lists, work, width, k, whole=whole)
+        else:
+            pair_d, pair_i = self._scan_each(qm2, qidx, work, k)
+        back = np.empty_like(order)
+        back[order] = np.arange(order.size)
+        cand_d = pair_d[back].reshape(nq, nprobe * k)
+        cand_i = pair_i[back].reshape(nq, nprobe * k)
+        sel = _topk_rows(cand_d, k)
+        return np.take_along_axis(cand_d, sel, axis=1), np.take_along_axis(cand_i, sel, axis=1)
 
-        def scan(items: list[tuple[int, int]]) -> None:
-            for a, b in items:
-                cell = int(lists[a])
-                lo, hi = int(self._offsets[cell]), int(self._offsets[cell + 1])
+    def _run(
+        self,
+        scan: Callable[[list[tuple[int, int, int, int]]], None],
+        work: list[tuple[int, int, int, int]],
+    ) -> None:
+        """Run ``scan`` over the cells, split over :attr:`threads` threads if set."""
+        # NumPy releases the GIL in the GEMM, the cast and the partition: cells are split
+        # over threads (each writes its own rows of the outputs).
+        threads = max(1, min(self.threads, len(work) // 16))
+        if threads == 1:
+            scan(work)
+        else:
+            with ThreadPoolExecutor(threads) as pool:
+                list(pool.map(scan, [work[t::threads] for t in range(threads)]))
+
+    def _scan_table(
+        self,
+        qa: NDArray[np.float32],
+        lists: NDArray[np.intp],
+        work: list[tuple[int, int, int, int]],
+        width: int,
+        k: int,
+        *,
+        whole: bool = False,
+    ) -> tuple[NDArray[np.float32], NDArray[np.int64]]:
+        """:meth:`_scan_each` with fewer steps per cell, for searches of small tables.
+
+        Each cell's distances go straight from the GEMM into one table (the squared norms come
+        out of the GEMM too, as a 129th column against a query column of ones); the partitions
+        run once per run of cells of the same size (``work`` comes ordered by size), and the
+        nearest are read out of the table for all cells at once. The numbers are the same as
+        :meth:`_scan_each`'s: squared distances between ``uint8`` vectors, and every partial
+        sum of them, are integers below 2**24, exact in float32 whatever the order of the
+        sums. Each row is partitioned on its own, and is the same row as there, so the same
+        columns come out in the same order (ties included). With ``whole``, all the descriptors are
+        converted to float32 at once (a temporary copy) rather than cell by cell.
+        """
+        npairs = qa.shape[0]
+        table = np.empty((npairs, width + 1), np.float32)
+        table[:, width] = np.inf  # where missing neighbours point
+        cols = np.full((npairs, k), width, np.intp)
+        data, norms = self._data, self._norms
+        converted = None
+        if whole:
+            converted = np.empty((self.ntotal, _DIM + 1), np.float32)
+            converted[:, :_DIM] = data
+            converted[:, _DIM] = norms
+
+        def scan(items: list[tuple[int, int, int, int]]) -> None:
+            buffer = np.empty((0 if whole else width, _DIM + 1), np.float32)  # one cell
+            for a, b, lo, hi in items:
+                n = hi - lo
+                if n == 0:
+                    continue
+                if converted is not None:
+                    block = converted[lo:hi]
+                else:
+                    block = buffer[:n]
+                    block[:, :_DIM] = data[lo:hi]
+                    block[:, _DIM] = norms[lo:hi]
+                np.matmul(qa[a:b], block.T, out=table[a:b, :n])
+
+        self._run(scan, work)
+        # The partitions, one per run of cells of the same size (rows of equal length: each
+        # row is partitioned on its own, as it would be alone).
+        sizes = [hi - lo for _, _, lo, hi in work]
+        for i, j in zip(*_runs(sizes), strict=True):
+            a, b, n = work[i][0], work[j - 1][1], sizes[i]
+            if k < n:
+                cols[a:b] = np.argpartition(table[a:b, :n], k - 1, axis=1)[:, :k]
+            else:
+                cols[a:b, :n] = np.arange(n)
+        pair_d = table.ravel()[cols + (np.arange(npairs) * (width + 1))[:, None]]
+        ids = np.append(self._ids.astype(np.int64), -1)  # -1 at ntotal: missing
+        where = np.where(cols == width, self.ntotal, self._offsets[lists][:, None] + cols)
+        return pair_d, ids[where]
+
+    def _scan_each(
+        self,
+        qm2: NDArray[np.float32],
+        qidx: NDArray[np.intp],
+        work: list[tuple[int, int, int, int]],
+        k: int,
+    ) -> tuple[NDArray[np.float32], NDArray[np.int64]]:
+        """Each probed cell's ``k`` nearest for the queries visiting it, cell by cell.
+
+        Used for large searches (where the GEMMs and partitions dominate, not the steps).
+        """
+        pair_d = np.full((qidx.size, k), np.inf, np.float32)
+        pair_i = np.full((qidx.size, k), -1, np.int64)
+
+        def scan(items: list[tuple[int, int, int, int]]) -> None:
+            for a, b, lo, hi in items:
                 if hi == lo:
                     continue
                 d = qm2[qidx[a:b]] @ self._data[lo:hi].astype(np.float32).T
@@ -664,24 +809,8 @@ class IVFIndex(_IndexBuilder):
                     pair_d[a:b, :kk] = d
                 pair_i[a:b, :kk] = self._ids[lo + cols]
 
-        # NumPy releases the GIL in the GEMM, the cast and the partition: cells are split
-        # over threads (each writes its own rows of pair_d / pair_i).
-        threads = max(1, min(self.threads, len(work) // 16))
-        if threads == 1:
-            scan(work)
-        else:
-            with ThreadPoolExecutor(threads) as pool:
-                list(pool.map(scan, [work[t::threads] for t in range(threads)]))
-        back = np.empty_like(order)
-        back[order] = np.arange(order.size)
-        cand_d = pair_d[back].reshape(nq, nprobe * k)
-        cand_i = pair_i[back].reshape(nq, nprobe * k)
-        sel = _topk_rows(cand_d, k)
-        out_d = np.take_along_axis(cand_d, sel, axis=1)
-        out_i = np.take_along_axis(cand_i, sel, axis=1)
-        out_d += qn[:, None]
-        np.maximum(out_d, 0.0, out=out_d)
-        return out_d, out_i
+        self._run(scan, work)
+        return pair_d, pair_i
 
 
 class FaissIndex(_IndexBuilder):
@@ -1027,9 +1156,21 @@ def _plausible(
         return False
     if np.any(_w_of(h, outline.astype(np.float64)) <= 0) or np.any(_w_of(h, t_xy) <= 0):
         return False
-    centre = t_xy.mean(axis=0, keepdims=True)
-    jc, _ = _local_jacobians(h, centre)
-    a = np.array([[jc[0][0], jc[1][0]], [jc[2][0], jc[3][0]]])
+    # The Jacobian at the centre, in Python floats: the same IEEE operations, in the same
+    # order, as _local_jacobians on a one-point array (and the same numbers), without the
+    # overhead of NumPy calls on one element.
+    x, y = t_xy.mean(axis=0).tolist()
+    (h00, h01, h02), (h10, h11, h12), (h20, h21, h22) = h.tolist()
+    u = h00 * x + h01 * y + h02
+    v = h10 * x + h11 * y + h12
+    w = h20 * x + h21 * y + h22
+    w2 = w * w
+    a = np.array(
+        [
+            [(h00 * w - u * h20) / w2, (h01 * w - u * h21) / w2],
+            [(h10 * w - v * h20) / w2, (h11 * w - v * h21) / w2],
+        ]
+    )
     if np.linalg.det(a) <= 0:
         return False
     sv = np.linalg.svd(a, compute_uv=False)
@@ -1100,11 +1241,14 @@ def _fit_view(
                 # Refit on the consistent inliers (least squares), then re-check.
                 h2, _ = cv2.findHomography(src[inl], dst[inl], 0)
                 if h2 is not None and _plausible(h2, outline, t_xy[inl]):
-                    inl2 = agree(h2)
+                    # The refit often returns the very same matrix (then so is the verdict).
+                    inl2 = inl if np.array_equal(h2, h) else agree(h2)
                     if inl2.sum() >= inl.sum():
                         h, inl = h2, inl2
                 best = _Fit(h / h[2, 2], inl, "homography")
-    if n >= 2:
+    # The similarity replaces the homography only if its inliers (a subset of the n matches)
+    # exceed 1.2 times the homography's: when n itself does not, it cannot.
+    if n >= 2 and (best is None or n > 1.2 * best.inliers.sum()):
         a, _ = cv2.estimateAffinePartial2D(
             src, dst, method=cv2.RANSAC, ransacReprojThreshold=threshold, maxIters=2000
         )
@@ -1768,10 +1912,15 @@ class ObjectDatabase:
             if counts.max() < need:
                 continue
             best: tuple[int, Detection] | None = None
-            for vid in vids[np.argsort(-counts, kind="stable")][:max_views].tolist():
-                sel = sel_o & (view == vid)
-                if sel.sum() < need:
+            order = np.argsort(-counts, kind="stable")[:max_views]
+            for vid, count in zip(vids[order].tolist(), counts[order].tolist(), strict=True):
+                # Views come most matched first, and a view's inliers are a subset of its
+                # matches: once a view has fewer than ``need`` matches, or no more than the
+                # best view's inliers (a later view must have strictly more to win), no view
+                # that follows can change the result.
+                if count < need or (best is not None and count <= best[0]):
                     break
+                sel = sel_o & (view == vid)
                 qi = q_idx[sel]
                 ti = t_idx[sel]
                 outline = db.outlines[vid]
