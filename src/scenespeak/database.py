@@ -1823,8 +1823,8 @@ class ObjectDatabase:
         max_angle_deg: float = 30.0,
         max_views: int = 3,
         nprobe: int = 4,
-        min_inliers_small: int = 6,
-        small_area: float = 4000.0,
+        min_inliers_small: int = 4,
+        small_area: float = 8000.0,
     ) -> Labelling:
         """Label query keypoints (of the scene's left image) with the database's objects.
 
