@@ -443,7 +443,6 @@ def test_dense_roi_may_come_from_a_function() -> None:
     # the pipeline finds the region (the recognised outlines) while the matching runs: a
     # function called once, before the dense map, gives the map the region a tuple gives
     from cardscene import BASELINE, HFOV, H, W, card_pair
-
     from scenespeak.calibration import rig_from_short
 
     left, right = card_pair({"astronaut": (-0.1, 1.2, 0.2), "chelsea": (0.15, 1.0, 0.2)})

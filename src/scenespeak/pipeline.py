@@ -17,16 +17,20 @@ stage's result in a frozen :class:`SceneDescription`:
    unknown points clustered into "unknown object N"; objects that cannot be described are
    listed in ``skipped`` with the reason;
 5. every ordered pair of objects through the Histogram of Forces and the rule base
-   (:mod:`scenespeak.language`), with the heights along up for the vertical relations; each
-   unordered pair's histograms are computed once (``language.pair_histograms``) and read both
-   ways (``language.relations_of_pair``).
+   (:mod:`scenespeak.language`), with the heights along up for the vertical relations; all
+   pairs in one call (``language.relate_objects``: each hull prepared once, each unordered
+   pair's histograms computed once and read both ways).
+
+Threads: the two SIFT extractions run at the same time; then the second thread matches the
+stereo pair while this one labels the left keypoints, and the dense map (which must cover the
+recognised outlines) starts as soon as the labels are known.
 
 Speed (``benchmarks/bench_pipeline.py --only timing``, 640×480 rendered pair with 5 objects,
-shared 2-core machine): the whole call takes about 1.2–1.4× the two SIFT extractions run one
-after the other and about 1.7–2.1× the two run in two threads as here; labelling, stereo,
-objects and relations take roughly 21 + 16 + 10 + 13 ms (README, "Speed"). Stages 2–5 run
-with BLAS limited to one thread (their matrices are small; a second OpenBLAS thread made a
-200 × 128 × 200 product 150× slower when the other core was busy).
+shared 2-core machine): the whole call takes about 1.0–1.1× the two SIFT extractions run one
+after the other and about 1.5–1.6× the two run in two threads as here; after SIFT, labelling
+14, waiting for the dense map 15, objects 7 and relations 4 ms (README, "Speed"). BLAS is
+limited to one thread (the matrices are small; a second OpenBLAS thread made a 200 × 128 ×
+200 product 150× slower when the other core was busy).
 
 :meth:`SceneDescription.to_dict` gives exactly the JSON of ``interfaces.md`` (plus extra
 fields); :meth:`SceneDescription.to_text` the sentences for people.
