@@ -545,6 +545,26 @@ class _Pairs:
     attrs: FloatArray
 
 
+def _edge_attributes(
+    v0: FloatArray, s0: FloatArray, v1: FloatArray, s1: FloatArray
+) -> tuple[FloatArray, NDArray[np.bool_]]:
+    """Edges from (s0, v0) to (s1, v1) as ``[v_lo, v_hi, s(v_lo), ds/dv, sign(dv)]``.
+
+    Returns the (5, *v0.shape) attributes and which edges run downwards in ``v`` (their lower
+    vertex is the end).
+    """
+    down = v1 < v0
+    attrs = np.empty((5, *v0.shape))
+    np.minimum(v0, v1, out=attrs[0])
+    np.maximum(v0, v1, out=attrs[1])
+    np.copyto(attrs[2], s0)
+    np.copyto(attrs[2], s1, where=down)
+    dv = v1 - v0
+    np.divide(s1 - s0, np.where(dv != 0, dv, np.inf), out=attrs[3])
+    np.sign(dv, out=attrs[4])
+    return attrs, down
+
+
 def _pairs(a: _Region, b: _Region, c: FloatArray, s: FloatArray) -> _Pairs:
     """All (edge of A, edge of B) pairs whose v-ranges overlap, for each direction (c, s).
 
@@ -581,19 +601,9 @@ def _pairs(a: _Region, b: _Region, c: FloatArray, s: FloatArray) -> _Pairs:
             return _Pairs(a=none, b=none, direction=none, attrs=np.zeros((5, 0)))
         s_all, v_all = s_all[kept], v_all[kept]
         n_dir = kept.size
-    v1 = v_all[:, nxt]
-    s1 = s_all[:, nxt]
-    down = v1 < v_all
+    attrs, down = _edge_attributes(v_all, s_all, v_all[:, nxt], s_all[:, nxt])
     idx = np.arange(width)
     low = idx + down * (nxt - idx)
-    attrs = np.empty((5, n_dir, width))
-    np.minimum(v_all, v1, out=attrs[0])
-    np.maximum(v_all, v1, out=attrs[1])
-    np.copyto(attrs[2], s_all)
-    np.copyto(attrs[2], s1, where=down)
-    dv = v1 - v_all
-    np.divide(s1 - s_all, np.where(dv != 0, dv, np.inf), out=attrs[3])
-    np.sign(dv, out=attrs[4])
     # Per vertex: how many edges it is the lower vertex of (0, 1, 2); an edge that shares its
     # lower vertex with the previous edge ranks second among the two.
     starts_low = ~down
@@ -790,18 +800,8 @@ def _many_pairs(items: Sequence[tuple[_Region, _Region]], c: FloatArray, s: Floa
     b_vertex = col >= np.repeat(np.repeat(firsts, rows_kept), row_width)
     entry_direction = np.repeat(np.concatenate(direction), row_width)
     idx = np.arange(base)
-    v1 = v_all[nxt]
-    s1 = s_all[nxt]
-    down = v1 < v_all
+    attrs, down = _edge_attributes(v_all, s_all, v_all[nxt], s_all[nxt])
     low = idx + down * (nxt - idx)
-    attrs = np.empty((5, base))
-    np.minimum(v_all, v1, out=attrs[0])
-    np.maximum(v_all, v1, out=attrs[1])
-    np.copyto(attrs[2], s_all)
-    np.copyto(attrs[2], s1, where=down)
-    dv = v1 - v_all
-    np.divide(s1 - s_all, np.where(dv != 0, dv, np.inf), out=attrs[3])
-    np.sign(dv, out=attrs[4])
     starts_low = ~down
     incoming_low = down[prv]
     mult = starts_low.astype(np.intp) + incoming_low
