@@ -439,9 +439,9 @@ def _half_rig() -> StereoRig:
     return StereoRig((370, 250), K1, K2, None, None, np.eye(3), [-B, 0, 0])
 
 
-def test_dense_roi_may_come_from_a_function() -> None:
-    # the pipeline finds the region (the recognised outlines) while the matching runs: a
-    # function called once, before the dense map, gives the map the region a tuple gives
+def test_dense_crop_covers_the_matches_plus_margin_and_the_given_region() -> None:
+    # the cropped dense map: the matches' bounding box plus dense_margin pixels, and a region
+    # the caller asks for (e.g. recognised outlines)
     from cardscene import BASELINE, HFOV, H, W, card_pair
     from scenespeak.calibration import rig_from_short
 
@@ -449,23 +449,13 @@ def test_dense_roi_may_come_from_a_function() -> None:
     # no texture, so no keypoints, along the top and the left edge
     left[:100] = right[:100] = left[:, :100] = right[:, :100] = 128
     rig = rig_from_short(BASELINE, HFOV, (W, H))
-    without = stereo_points(left, right, rig, dense_crop=True)
-    assert without.dense is not None and without.dense.roi is not None
-    x0, y0, _, _ = without.dense.roi
-    assert x0 > 20 and y0 > 20  # the keypoints do not reach the top-left corner
-    region = (5.0, 3.0, 20.0, 15.0)
-    calls: list[int] = []
-
-    def later() -> tuple[float, float, float, float]:
-        calls.append(1)
-        return region
-
-    as_tuple = stereo_points(left, right, rig, dense_crop=True, dense_roi=region)
-    as_call = stereo_points(left, right, rig, dense_crop=True, dense_roi=later)
-    assert calls == [1]
-    assert as_tuple.dense is not None and as_call.dense is not None
-    np.testing.assert_array_equal(as_call.dense.disparity, as_tuple.dense.disparity)
-    np.testing.assert_array_equal(as_call.points.xyz, as_tuple.points.xyz)
-    assert as_call.dense.roi is not None
-    x0, y0, x1, y1 = as_call.dense.roi
-    assert x0 <= 5 and y0 <= 3 and x1 >= 20 and y1 >= 15
+    plain = stereo_points(left, right, rig, dense_crop=True)  # dense_margin=5
+    wide = stereo_points(left, right, rig, dense_crop=True, dense_margin=17)
+    asked = stereo_points(left, right, rig, dense_crop=True, dense_roi=(5.0, 3.0, 20.0, 15.0))
+    rois = [r.dense.roi if r.dense is not None else None for r in (plain, wide, asked)]
+    assert all(roi is not None for roi in rois)
+    (px0, py0, px1, py1), (wx0, wy0, wx1, wy1), (ax0, ay0, _, _) = rois  # type: ignore[misc]
+    assert px0 > 20 and py0 > 20  # the keypoints do not reach the top-left corner
+    assert (wx0, wy0) == (px0 - 12, py0 - 12)
+    assert (wx1, wy1) == (min(W, px1 + 12), min(H, py1 + 12))
+    assert ax0 <= 5 and ay0 <= 3

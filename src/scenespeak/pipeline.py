@@ -21,14 +21,14 @@ stage's result in a frozen :class:`SceneDescription`:
    pairs in one call (``language.relate_objects``: each hull prepared once, each unordered
    pair's histograms computed once and read both ways).
 
-Threads: the two SIFT extractions run at the same time; then the second thread matches the
-stereo pair while this one labels the left keypoints, and the dense map (which must cover the
-recognised outlines) starts as soon as the labels are known.
+Threads: the two SIFT extractions run at the same time; then the second thread runs the whole
+stereo stage (matching, SGBM around the matches, triangulation) while this one labels the left
+keypoints (``docs/architecture.md``).
 
 Speed (``benchmarks/bench_pipeline.py --only timing``, 640×480 rendered pair with 5 objects,
-shared 2-core machine): the whole call takes about 1.0–1.1× the two SIFT extractions run one
-after the other and about 1.5–1.6× the two run in two threads as here; after SIFT, labelling
-14, waiting for the dense map 15, objects 7 and relations 4 ms (README, "Speed"). BLAS is
+shared 2-core machine): the whole call takes about 0.9–1.0× the two SIFT extractions run one
+after the other and about 1.4–1.5× the two run in two threads as here; after SIFT, labelling
+14, waiting for the stereo stage 10, objects 8 and relations 4.5 ms (README, "Speed"). BLAS is
 limited to one thread (the matrices are small; a second OpenBLAS thread made a 200 × 128 ×
 200 product 150× slower when the other core was busy).
 
@@ -89,8 +89,13 @@ class PipelineOptions:
     dense_max_points : int
         Dense points used per object (an even random sample of the region's pixels).
     dense_crop : bool
-        Compute the dense map only over the bounding box of the keypoints it verifies and of
-        the recognised outlines (``stereo.stereo_points(dense_crop=True)``), not the whole image.
+        Compute the dense map only over the bounding box of the stereo matches it verifies,
+        plus ``dense_margin`` pixels (``stereo.stereo_points(dense_crop=True)``), not the whole
+        image. A recognised outline reaches beyond that box only by a few textureless pixels,
+        where SGBM finds little anyway (``docs/calibration.md``); the map does not wait for the
+        labels, so it is computed while the objects are recognised.
+    dense_margin : int
+        Pixels around the matches' box for ``dense_crop``.
     unknown : bool
         Cluster unlabelled keypoints into unknown objects.
     unknown_max_distance : float
@@ -117,6 +122,7 @@ class PipelineOptions:
     dense_min_points: int = 30
     dense_max_points: int = 300
     dense_crop: bool = True
+    dense_margin: int = 16
     unknown: bool = True
     unknown_max_distance: float = 2.5
     min_points: int = 3
@@ -341,24 +347,6 @@ def _relate_all(objects: tuple[SceneObject, ...], directions: int) -> list[PairR
     return relations
 
 
-def _outlines_box(labelling: Any, shape: tuple[int, int]) -> tuple[float, ...] | None:
-    """Bounding box (x0, y0, x1, y1) of the recognised outlines inside the image, or None."""
-    h, w = shape
-    boxes = []
-    for d in labelling.detections:
-        xy = np.asarray(d.outline_in_scene, dtype=np.float64).reshape(-1, 2)
-        xy = xy[np.all(np.isfinite(xy), axis=1)]
-        if len(xy):
-            lo = np.clip(xy.min(axis=0), 0, [w, h])
-            hi = np.clip(xy.max(axis=0), 0, [w, h])
-            if np.all(hi > lo):
-                boxes.append((*lo, *hi))
-    if not boxes:
-        return None
-    b = np.array(boxes)
-    return (float(b[:, 0].min()), float(b[:, 1].min()), float(b[:, 2].max()), float(b[:, 3].max()))
-
-
 def describe_scene(
     left: NDArray[np.generic],
     right: NDArray[np.generic],
@@ -417,45 +405,30 @@ def describe_scene(
     say = progress or (lambda _stage: None)
 
     # SIFT once per image, the two images at the same time (OpenCV releases the GIL). Once the
-    # right image's features exist, the worker thread goes on with the stereo matching (it
-    # does not need the labels) while this thread labels the left keypoints (the database
-    # stays in this thread: SQLite connections belong to their thread); the dense map, which
-    # must cover the recognised outlines, waits for the labels. The rest works on small
-    # matrices (a few hundred keypoints and points): OpenBLAS's second thread only costs
-    # there, and a lot when the other core is busy (a 200 x 128 x 200 product took 16 ms
-    # instead of 0.1 ms on the shared 2-core machine), so BLAS runs single-threaded throughout.
+    # right image's features exist, the worker thread runs the whole stereo stage (matching,
+    # SGBM, triangulation: none of it needs the labels) while this thread labels the left
+    # keypoints (the database stays here: SQLite connections belong to their thread). The
+    # rest works on small matrices (a few hundred keypoints and points): OpenBLAS's second
+    # thread only costs there, and a lot when the other core is busy (a 200 x 128 x 200
+    # product took 16 ms instead of 0.1 ms on the shared 2-core machine), so BLAS runs
+    # single-threaded throughout.
     say("sift")
-    outlines: Future[tuple[float, ...] | None] = Future()
     with _single_threaded_blas(), ThreadPoolExecutor(max_workers=1) as pool:
         t0 = time.perf_counter()
         future_r = pool.submit(detect, to_gray(right), precise_upscale=False)
         feats_l = detect(to_gray(left), precise_upscale=False)
         timings["sift"] = time.perf_counter() - t0
         future_st = pool.submit(
-            _stereo_stage,
-            left,
-            right,
-            rig,
-            opts,
-            feats_l,
-            future_r,
-            outlines.result if opts.dense else None,
-            (lname, rname),
-            timings,
+            _stereo_stage, left, right, rig, opts, feats_l, future_r, (lname, rname), timings
         )
-        try:
-            with _timed(timings, "label"):
-                labelling = db.label(
-                    feats_l,
-                    ratio=opts.label_ratio,
-                    min_inliers=opts.min_inliers,
-                    min_inliers_small=opts.min_inliers_small,
-                    small_area=opts.small_area,
-                )
-            outlines.set_result(_outlines_box(labelling, left.shape[:2]))
-        finally:
-            if not outlines.done():  # labelling failed: let the worker finish
-                outlines.set_result(None)
+        with _timed(timings, "label"):
+            labelling = db.label(
+                feats_l,
+                ratio=opts.label_ratio,
+                min_inliers=opts.min_inliers,
+                min_inliers_small=opts.min_inliers_small,
+                small_area=opts.small_area,
+            )
         say("stereo")
         with _timed(timings, "wait"):
             feats_r, result = future_st.result()
@@ -471,7 +444,6 @@ def _stereo_stage(
     opts: PipelineOptions,
     feats_l: Any,
     future_r: Future[Any],
-    dense_roi: Callable[[], tuple[float, ...] | None] | None,
     names: tuple[str, str],
     timings: dict[str, float],
 ) -> tuple[Any, Any]:
@@ -479,15 +451,6 @@ def _stereo_stage(
     from scenespeak import stereo
 
     feats_r = future_r.result()
-    waited = [0.0]
-
-    def roi() -> tuple[float, ...] | None:
-        # the time spent waiting for the labels is not the stereo stage's
-        t0 = time.perf_counter()
-        box = None if dense_roi is None else dense_roi()
-        waited[0] = time.perf_counter() - t0
-        return box
-
     with _timed(timings, "stereo"):
         result = stereo.stereo_points(
             left,
@@ -499,9 +462,8 @@ def _stereo_stage(
             left_name=names[0],
             right_name=names[1],
             dense_crop=opts.dense_crop,
-            dense_roi=roi,  # type: ignore[arg-type]
+            dense_margin=opts.dense_margin,
         )
-    timings["stereo"] -= waited[0]
     return feats_r, result
 
 

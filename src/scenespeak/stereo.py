@@ -38,7 +38,6 @@ than 750 with more than 97 %.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
 from dataclasses import dataclass
 from os import PathLike
 from pathlib import Path
@@ -905,9 +904,8 @@ def stereo_points(
     right_name: str = "right image",
     min_points: int = 0,
     dense_crop: bool = False,
-    dense_roi: tuple[float, float, float, float]
-    | Callable[[], tuple[float, float, float, float] | None]
-    | None = None,
+    dense_roi: tuple[float, float, float, float] | None = None,
+    dense_margin: int = 5,
 ) -> StereoResult:
     """Match and triangulate a stereo pair in one call (SIFT runs once per image).
 
@@ -940,12 +938,11 @@ def stereo_points(
         to check (plus ``dense_roi``) instead of the whole image: the same checks for a
         fraction of the cost when the scene does not fill the image (about 2.5× faster on the
         rendered table scenes); elsewhere the map is NaN.
-    dense_roi : (x0, y0, x1, y1) or callable, optional
+    dense_roi : (x0, y0, x1, y1), optional
         With ``dense_crop``, a region of the INPUT left image (pixels) the dense map must also
-        cover, e.g. the recognised objects' outlines for :func:`region_points`. It may be a
-        function of no arguments returning the region (or None), called once the matches are
-        known and just before the dense map is computed: a caller running this in a second
-        thread can find the region meanwhile (the pipeline labels the objects).
+        cover, e.g. the recognised objects' outlines for :func:`region_points`.
+    dense_margin : int
+        With ``dense_crop``, pixels added around the keypoints' bounding box (and the region).
 
     Returns
     -------
@@ -970,8 +967,7 @@ def stereo_points(
             # the disparity range for SGBM comes from the strict in-band matches
             strict = _select(cand, fl, rect, search="band", ratio=ratio, **kw)
             m = _select(cand, fl, rect, search="band", ratio=band_ratio, **kw)
-            extra = dense_roi() if callable(dense_roi) else dense_roi
-            roi = _dense_box(m, rect, extra, margin=5) if dense_crop else None
+            roi = _dense_box(m, rect, dense_roi, dense_margin) if dense_crop else None
             dense = dense_disparity(
                 gl, gr, rect, keypoint_disparities=strict.disparity, roi=roi, pad=16
             )
