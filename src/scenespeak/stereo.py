@@ -190,8 +190,6 @@ class DenseDisparity:
         The disparity search range used.
     roi : (x0, y0, x1, y1) or None
         The part of the rectified left image that was computed (None: all of it).
-    pad : int
-        Pixels of context computed around ``roi`` (see :func:`dense_disparity`).
     """
 
     disparity: NDArray[np.float32]
@@ -199,7 +197,6 @@ class DenseDisparity:
     min_disparity: int
     num_disparities: int
     roi: tuple[int, int, int, int] | None = None
-    pad: int = 0
 
     def valid_fraction(self) -> float:
         """Fraction of pixels with a disparity."""
@@ -745,9 +742,9 @@ def dense_disparity(
     y0, y1 = max(0, int(y0)), min(h, math.ceil(y1))
     out = np.full((h, w), np.nan, np.float32)
     box = None if roi is None else (x0, y0, x1, y1)
-    pad = block_size // 2 + 2 if pad is None else max(0, int(pad))
     if x1 <= x0 or y1 <= y0:
-        return DenseDisparity(out, rect, mn, num, box, pad)
+        return DenseDisparity(out, rect, mn, num, box)
+    pad = block_size // 2 + 2 if pad is None else max(0, int(pad))
     # A crop: rows y0..y1; columns from far enough left that every disparity can be searched.
     # OpenCV computes nothing in the first minDisparity + numDisparities columns of its input;
     # where the crop would have to start left of the image, black columns stand in, so that
@@ -780,7 +777,7 @@ def dense_disparity(
     d = raw.astype(np.float32) / 16.0
     d[raw < mn * 16] = np.nan  # OpenCV marks unknown pixels with (minDisparity - 1) * 16
     out[y0:y1, x0:x1] = d[y0 - ya : y1 - ya, border + x0 - xa : border + x1 - xa]
-    return DenseDisparity(out, rect, mn, num, box, pad)
+    return DenseDisparity(out, rect, mn, num, box)
 
 
 def region_points(
