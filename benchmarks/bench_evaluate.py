@@ -3,7 +3,7 @@
     python benchmarks/bench_evaluate.py                 # generates 8 scenes into a temp folder
     python benchmarks/bench_evaluate.py /tmp/eval100 --repeat 1
 
-For each worker count it runs :func:`scenespeak.evaluation.evaluate` ``--repeat`` times and
+For each worker count it runs :func:`scenespeak.tools.evaluation.evaluate` ``--repeat`` times and
 prints the median wall-clock time, scenes per second, and the median per-scene time measured
 inside the workers. The machine is shared: read ratios rather than absolute times.
 """
@@ -16,7 +16,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from scenespeak.evaluation import evaluate
+from scenespeak.tools.evaluation import evaluate
 
 
 def main() -> None:
@@ -30,7 +30,7 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as tmp:
         dataset = args.dataset
         if dataset is None:
-            from scenespeak.scenes import generate_dataset
+            from scenespeak.tools.scenes import generate_dataset
 
             dataset = Path(tmp) / "scenes"
             t0 = time.perf_counter()

@@ -1,4 +1,4 @@
-"""Benchmark of the Histogram of Forces engine (``scenespeak.forces``).
+"""Benchmark of the Histogram of Forces engine (``scenespeak.spatial.forces``).
 
 Prints median wall-clock times (one process, one thread) of F0 + F2:
 
@@ -34,7 +34,7 @@ import numpy as np
 from numpy.typing import NDArray
 from skimage.draw import polygon as raster_polygon
 
-from scenespeak.forces import force_histogram, force_histograms, hybrid_histogram
+from scenespeak.spatial.forces import force_histogram, force_histograms, hybrid_histogram
 
 Array = NDArray[np.float64]
 
@@ -100,7 +100,7 @@ def masks() -> tuple[NDArray[np.bool_], NDArray[np.bool_]]:
 
 def polygon_vertices(mask: NDArray[np.bool_], tolerance: float) -> int:
     """Number of outline vertices a mask is traced into (private helper, for the table)."""
-    from scenespeak.forces import _mask_region
+    from scenespeak.spatial.forces import _mask_region
 
     return len(_mask_region(mask, "mask", tolerance).start)
 
@@ -118,7 +118,7 @@ def scene_hulls() -> list[Array]:
 
 def scene_pairs(directions: int = 180) -> tuple[Callable[[], object], Callable[[], object]]:
     """(per pair, all pairs at once) F0+F2 of every unordered pair of :func:`scene_hulls`."""
-    from scenespeak.forces import _many_f0_and_f2, _polygon_region
+    from scenespeak.spatial.forces import _many_f0_and_f2, _polygon_region
 
     hulls = scene_hulls()
     index = [(i, j) for i in range(len(hulls)) for j in range(i + 1, len(hulls))]

@@ -42,10 +42,10 @@ from typing import Any
 
 import numpy as np
 
-from scenespeak.calibration import load_rig
-from scenespeak.database import ObjectDatabase
-from scenespeak.features import detect, load_image, to_gray
-from scenespeak.objects import project_to_plane
+from scenespeak.perception.calibration import load_rig
+from scenespeak.perception.database import ObjectDatabase
+from scenespeak.perception.features import detect, load_image, to_gray
+from scenespeak.perception.objects import project_to_plane
 from scenespeak.pipeline import database_from_dataset, describe_scene
 
 BANDS = ((0.5, 1.0), (1.0, 1.5), (1.5, 2.0), (2.0, 9.0))
@@ -53,7 +53,7 @@ BANDS = ((0.5, 1.0), (1.0, 1.5), (1.5, 2.0), (2.0, 9.0))
 
 def dataset(cache: Path, n: int, seed: int, pitched: bool) -> tuple[Path, Path]:
     """A generated dataset and its object database (made once, then reused)."""
-    from scenespeak.scenes import generate_dataset
+    from scenespeak.tools.scenes import generate_dataset
 
     root = cache / f"scenes-n{n}-s{seed}{'-pitched' if pitched else ''}"
     if not (root / "dataset.json").exists():

@@ -19,7 +19,7 @@ import time
 from collections import Counter
 from pathlib import Path
 
-from scenespeak.scenes import CATALOGUE, generate_scene, load_truth, render_training_views
+from scenespeak.tools.scenes import CATALOGUE, generate_scene, load_truth, render_training_views
 
 
 def main() -> None:

@@ -1,7 +1,7 @@
 """Stereo stage on the Middlebury 2014 *motorcycle* pair (scikit-image, ground-truth disparity).
 
 Prints, for the plain baseline (OpenCV SIFT, brute-force kNN, ratio 0.6, epipolar band,
-positive disparity) and for ``scenespeak.stereo.stereo_points``:
+positive disparity) and for ``scenespeak.perception.stereo.stereo_points``:
 
 * matches, % within 1 px and 2 px of the ground-truth disparity (where it is known), median
   depth error;
@@ -23,9 +23,9 @@ import cv2
 import numpy as np
 from skimage import data
 
-from scenespeak.calibration import StereoRig, rectify
-from scenespeak.features import Features, detect, to_gray
-from scenespeak.stereo import (
+from scenespeak.perception.calibration import StereoRig, rectify
+from scenespeak.perception.features import Features, detect, to_gray
+from scenespeak.perception.stereo import (
     _candidates,
     _select,
     _verify_dense,

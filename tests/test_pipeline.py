@@ -5,7 +5,7 @@ Two kinds of scenes:
 - photo cards: crops of scikit-image's photos pasted as fronto-parallel cards at known places
   (exactly ``f·B/Z`` pixels apart in the right image) in front of a textured wall. A card is
   flat, so its visible surface *is* its position: centroids must be within 2 cm.
-- rendered scenes from ``scenespeak.scenes`` (pybullet), level and pitched rig, generated once
+- rendered scenes from ``scenespeak.tools.scenes`` (pybullet), level and pitched rig, generated once
   per session (see the ``rendered`` fixture).
 """
 
@@ -20,10 +20,10 @@ import numpy as np
 import pytest
 
 from cardscene import BASELINE, HFOV, H, W, card_pair, photo
-from scenespeak.calibration import rig_from_short
-from scenespeak.database import ObjectDatabase
 from scenespeak.errors import DatabaseError, ImageError
-from scenespeak.objects import SceneObject, project_to_plane
+from scenespeak.perception.calibration import rig_from_short
+from scenespeak.perception.database import ObjectDatabase
+from scenespeak.perception.objects import SceneObject, project_to_plane
 from scenespeak.pipeline import SceneDescription, describe_files, describe_scene
 
 _photo = photo
@@ -165,7 +165,7 @@ def test_describe_files_names_the_inputs(card_db: Path, tmp_path: Path) -> None:
 
 
 # --------------------------------------------------------------------------------------------
-# rendered scenes (scenespeak.scenes)
+# rendered scenes (scenespeak.tools.scenes)
 
 
 def _truth_xy(obj: dict[str, Any], up: np.ndarray) -> np.ndarray:
@@ -175,7 +175,7 @@ def _truth_xy(obj: dict[str, Any], up: np.ndarray) -> np.ndarray:
 @pytest.fixture(scope="module", params=["level", "pitched"])
 def rendered(request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFactory) -> Path:
     """A few rendered scenes (fixed seeds) and the database learnt from their training views."""
-    scenes = pytest.importorskip("scenespeak.scenes")
+    scenes = pytest.importorskip("scenespeak.tools.scenes")
     from scenespeak.pipeline import database_from_dataset
 
     pitched = request.param == "pitched"

@@ -36,14 +36,14 @@ __all__ = [
 ]
 
 if TYPE_CHECKING:  # pragma: no cover
-    from scenespeak.language import relate
+    from scenespeak.spatial.language import relate
 
 
 def __getattr__(name: str) -> Any:
     # ``relate`` lives in the language stage; import it lazily so that ``import scenespeak``
     # stays cheap and never pulls in more than the caller uses.
     if name == "relate":
-        from scenespeak.language import relate
+        from scenespeak.spatial.language import relate
 
         return relate
     raise AttributeError(f"module 'scenespeak' has no attribute {name!r}")

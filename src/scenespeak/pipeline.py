@@ -3,21 +3,22 @@
 :func:`describe_scene` runs the stages of ``docs/architecture.md`` once each and keeps every
 stage's result in a frozen :class:`SceneDescription`:
 
-1. SIFT on both images and stereo matching (:func:`scenespeak.stereo.stereo_points`; SIFT runs
-   once per image and the left features are reused for labelling);
+1. SIFT on both images and stereo matching
+   (:func:`scenespeak.perception.stereo.stereo_points`; SIFT runs once per image and the left
+   features are reused for labelling);
 2. labelling of the left keypoints against the database (ratio test + geometric check,
-   :meth:`scenespeak.database.ObjectDatabase.label`);
+   :meth:`scenespeak.perception.database.ObjectDatabase.label`);
 3. the distance strategy: for each recognised object its training outline, carried into the left
    image by the fitted homography, selects a region whose depth is taken from dense stereo
    (OpenCV StereoSGBM, computed once per pair over the disparity range the keypoints need and
    only over the bounding box of the keypoints it verifies and of the recognised outlines), so
    that a far object gets the hull of its visible surface rather than of three keypoints; the
    keypoints are the fallback;
-4. objects on the horizontal plane (:mod:`scenespeak.objects`): outlier removal, convex hull,
-   unknown points clustered into "unknown object N"; objects that cannot be described are
-   listed in ``skipped`` with the reason;
+4. objects on the horizontal plane (:mod:`scenespeak.perception.objects`): outlier removal,
+   convex hull, unknown points clustered into "unknown object N"; objects that cannot be
+   described are listed in ``skipped`` with the reason;
 5. every ordered pair of objects through the Histogram of Forces and the rule base
-   (:mod:`scenespeak.language`), with the heights along up for the vertical relations; all
+   (:mod:`scenespeak.spatial.language`), with the heights along up for the vertical relations; all
    pairs in one call (``language.relate_objects``: each hull prepared once, each unordered
    pair's histograms computed once and read both ways).
 
@@ -52,8 +53,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from scenespeak.errors import DatabaseError, ImageError, InputError
-from scenespeak.features import detect, to_gray
-from scenespeak.objects import SceneObject, Skipped, build_objects, make_object
+from scenespeak.perception.features import detect, to_gray
+from scenespeak.perception.objects import SceneObject, Skipped, build_objects, make_object
 
 __all__ = [
     "PairRelation",
@@ -140,7 +141,7 @@ class PairRelation:
     Attributes
     ----------
     relation : Relation
-        The words and numbers of :mod:`scenespeak.language` (``primary``, ``secondary``,
+        The words and numbers of :mod:`scenespeak.spatial.language` (``primary``, ``secondary``,
         ``sentence``, ``hedge``, ``vertical``, ...; also readable directly on this object).
     f0, f2 : (directions,) float64
         F0 and F2 of the argument relative to the referent; ``f2`` is the hybrid F02 where F2 is
@@ -328,12 +329,12 @@ def _points_inside(xy: NDArray[np.float64], mask: NDArray[np.bool_]) -> NDArray[
 def _relate_all(objects: tuple[SceneObject, ...], directions: int) -> list[PairRelation]:
     """Every ordered pair through the force histograms and the rule base.
 
-    :func:`scenespeak.language.relate_objects` prepares each hull once, computes each
+    :func:`scenespeak.spatial.language.relate_objects` prepares each hull once, computes each
     unordered pair's F0 and F2 (or the hybrid F02 where the hulls touch) in one sweep over all
     pairs and describes both orderings (F(B, A) is F(A, B) turned by 180°), with the heights
     along up for the vertical relations.
     """
-    from scenespeak.language import relate_objects
+    from scenespeak.spatial.language import relate_objects
 
     found = relate_objects(
         [o.hull for o in objects],
@@ -365,9 +366,9 @@ def describe_scene(
     left, right : ndarray
         The stereo pair (gray or RGB, same size, the rig's size).
     rig : StereoRig
-        Its calibration (``scenespeak.calibration.load_rig``).
+        Its calibration (``scenespeak.perception.calibration.load_rig``).
     db : ObjectDatabase
-        The object database (``scenespeak.database.ObjectDatabase.open``).
+        The object database (``scenespeak.perception.database.ObjectDatabase.open``).
     options : PipelineOptions, optional
         The knobs; keyword ``overrides`` replace single fields (``dense=False``, ...).
     sources : mapping, optional
@@ -388,7 +389,7 @@ def describe_scene(
     """
     from dataclasses import replace
 
-    from scenespeak import stereo
+    from scenespeak.perception import stereo
 
     opts = options or PipelineOptions()
     if overrides:
@@ -448,7 +449,7 @@ def _stereo_stage(
     timings: dict[str, float],
 ) -> tuple[Any, Any]:
     """The right image's features (from ``future_r``), then the stereo stage (worker thread)."""
-    from scenespeak import stereo
+    from scenespeak.perception import stereo
 
     feats_r = future_r.result()
     with _timed(timings, "stereo"):
@@ -469,7 +470,7 @@ def _stereo_stage(
 
 def _single_threaded_blas() -> AbstractContextManager[object]:
     """Limit BLAS to one thread for a ``with`` block (threadpoolctl, if installed)."""
-    from scenespeak.database import _single_threaded_blas as limit
+    from scenespeak.perception.database import _single_threaded_blas as limit
 
     return limit()
 
@@ -508,7 +509,7 @@ def _after_stereo(
         relations = _relate_all(objects, opts.directions)
         summary = ""
         if opts.summary and relations:
-            from scenespeak.language import summarize_scene
+            from scenespeak.spatial.language import summarize_scene
 
             summary = summarize_scene(
                 [r.relation for r in relations],
@@ -652,7 +653,7 @@ def _dense_regions(
     is reused; without one, SGBM runs once over the bounding box of all outlines and the
     disparity range of the keypoints.
     """
-    from scenespeak import stereo
+    from scenespeak.perception import stereo
 
     if not masks:
         return {}
@@ -696,9 +697,9 @@ def describe_files(
     with NaN or a singular matrix, a file that is not an object database, an empty database,
     a scene without texture).
     """
-    from scenespeak.calibration import load_rig, load_ros_rig
-    from scenespeak.database import ObjectDatabase
-    from scenespeak.features import load_image
+    from scenespeak.perception.calibration import load_rig, load_ros_rig
+    from scenespeak.perception.database import ObjectDatabase
+    from scenespeak.perception.features import load_image
 
     rig = load_rig(calib_path) if calib_right is None else load_ros_rig(calib_path, calib_right)
     left = load_image(left_path, gray=False)
@@ -726,7 +727,7 @@ def database_from_dataset(
     InputError
         If the dataset has no ``objects`` folder.
     """
-    from scenespeak.database import ObjectDatabase
+    from scenespeak.perception.database import ObjectDatabase
 
     root = Path(dataset) / "objects"
     if not root.is_dir():

@@ -1,0 +1,72 @@
+"""``scenespeak points``: matched and triangulated keypoints of a stereo pair."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Annotated, Any
+
+import typer
+
+from scenespeak.cli._app import (
+    CalibOpt,
+    CalibRightOpt,
+    PointsFormat,
+    QuietOpt,
+    _echo,
+    _load_rig,
+    _status,
+    _write_text,
+    app,
+)
+from scenespeak.errors import InputError
+
+
+@app.command("points")
+def points_cmd(
+    left: Annotated[Path, typer.Argument(help="Left image.")],
+    right: Annotated[Path, typer.Argument(help="Right image.")],
+    calib: CalibOpt,
+    calib_right: CalibRightOpt = None,
+    fmt: Annotated[PointsFormat, typer.Option("--format", help="json or ply.")] = (
+        PointsFormat.json
+    ),
+    out: Annotated[Path | None, typer.Option("--out", help="Write here, not stdout.")] = None,
+    ratio: Annotated[float, typer.Option(help="Lowe's ratio test threshold.")] = 0.6,
+    quiet: QuietOpt = False,
+) -> None:
+    """Matched and triangulated keypoints of a stereo pair (before any labelling)."""
+    from scenespeak.perception import stereo
+    from scenespeak.perception.features import load_image
+
+    rig = _load_rig(calib, calib_right)
+    left_img = load_image(left)
+    right_img = load_image(right)
+    with _status("matching the stereo pair", quiet):
+        points = _stereo_points(
+            stereo, left_img, right_img, rig, ratio=ratio, sources=(left, right)
+        )
+    if fmt is PointsFormat.ply:
+        if out is None:
+            raise InputError(
+                "--out", "PLY is binary-free but long: give --out FILE for --format ply"
+            )
+        try:
+            stereo.write_ply(points, out)
+        except OSError as exc:
+            raise InputError(out, f"cannot write ({exc.strerror})") from exc
+        return
+    text = json.dumps(stereo.points_to_json(points))
+    if out is None:
+        _echo(text)
+    else:
+        _write_text(out, text + "\n")
+
+
+def _stereo_points(
+    stereo: Any, left: Any, right: Any, rig: Any, *, ratio: float, sources: tuple[Path, Path]
+) -> Any:
+    result = stereo.stereo_points(
+        left, right, rig, ratio=ratio, left_name=str(sources[0]), right_name=str(sources[1])
+    )
+    return result.points

@@ -1,0 +1,1 @@
+"""Tools beside the pipeline: the scene generator, the evaluation and the figures."""
