@@ -22,8 +22,10 @@ from scenespeak.spatial.language import (
     describe_viewer_relation,
     layout_table,
     relate,
+    rules,
     summarize_scene,
     vertical_relation,
+    words,
 )
 from scenespeak.spatial.layouts import (
     FIG8,
@@ -316,15 +318,15 @@ def test_extends_rule_on_synthetic() -> None:
 def test_coverage_on_synthetic() -> None:
     t = Thresholds()
     half = np.where(np.arange(N) < N // 2, 1.0, 0.0)
-    assert language._coverage(half, t) == pytest.approx(0.5 + 10 / 180, abs=0.02)
+    assert rules._coverage(half, t) == pytest.approx(0.5 + 10 / 180, abs=0.02)
     # Isolated empty bins (hull noise) are smoothed away: coverage stays complete.
     holes = np.ones(N)
     holes[::15] = 0.0
-    assert language._coverage(holes, t) == 1.0
+    assert rules._coverage(holes, t) == 1.0
     # Tails below 10 % of the maximum do not count.
     tail = np.full(N, 0.05)
     tail[:90] = 1.0
-    assert language._coverage(tail, t) < 0.6
+    assert rules._coverage(tail, t) < 0.6
 
 
 def test_surround_rule_on_synthetic() -> None:
@@ -348,22 +350,22 @@ def test_every_combination_is_grammatical() -> None:
     hedges = ["directly", None, "mostly", "loosely"]
     for frame in ("object", "viewer"):
         for p, hedge in itertools.product(DIRECTIONS, hedges):
-            ccw, cw = language._neighbours(p)
+            ccw, cw = rules._neighbours(p)
             options = [(None, None)] + [
                 (s, sh) for s in (ccw, cw) for sh in ("somewhat", "slightly", "extends")
             ]
             for s, sh in options:
-                d = language._Decision("direction", p, s, hedge, sh, 1.0, 0.0, 0.0, 0.0)
-                seen.add(language._render(d, "hat", "can", frame))
+                d = words._Decision("direction", p, s, hedge, sh, 1.0, 0.0, 0.0, 0.0)
+                seen.add(words._render(d, "hat", "can", frame))
         for fb, lr in itertools.product(("front", "behind"), ("left", "right")):
-            d = language._Decision("compound", fb, lr, None, None, 1.0, 0.0, 0.0, 0.0)
-            seen.add(language._render(d, "hat", "can", frame))
+            d = words._Decision("compound", fb, lr, None, None, 1.0, 0.0, 0.0, 0.0)
+            seen.add(words._render(d, "hat", "can", frame))
         for kind in ("surrounded", "partly surrounded", "surrounds", "partly surrounds"):
-            d = language._Decision(kind, "surrounded", None, None, None, 1.0, 0.0, 0.0, 0.0)
-            seen.add(language._render(d, "hat", "can", frame))
+            d = words._Decision(kind, "surrounded", None, None, None, 1.0, 0.0, 0.0, 0.0)
+            seen.add(words._render(d, "hat", "can", frame))
         for v in language.VERTICAL_WORDS:
-            d = language._Decision("direction", "left", None, None, None, 1.0, 0.0, 0.0, 0.0)
-            seen.add(language._render(d, "hat", "can", frame, v))
+            d = words._Decision("direction", "left", None, None, None, 1.0, 0.0, 0.0, 0.0)
+            seen.add(words._render(d, "hat", "can", frame, v))
     assert len(seen) > 150
     for s in seen:
         assert re.fullmatch(r"The hat [a-z][a-zI ,\-]*[a-z]\.", s), s

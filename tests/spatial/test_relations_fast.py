@@ -29,6 +29,7 @@ from scenespeak.spatial.degrees import (
     four_degrees,
     many_degrees,
 )
+from scenespeak.spatial.language import rules
 
 seeds = st.integers(min_value=0, max_value=2**32 - 1)
 
@@ -373,17 +374,17 @@ def test_boxes_apart_is_contacts_first_test() -> None:
 def test_as_histograms_matches_as_histogram() -> None:
     rng = np.random.default_rng(2)
     hs = [rng.exponential(size=180) - 1e-13 for _ in range(6)]
-    got = language._as_histograms(hs, ("f0", "f2"))
+    got = rules._as_histograms(hs, ("f0", "f2"))
     for h, g in zip(hs, got, strict=True):
-        np.testing.assert_array_equal(g, language._as_histogram(h, "f0"))
+        np.testing.assert_array_equal(g, rules._as_histogram(h, "f0"))
     bad = [h.copy() for h in hs]
     bad[3][7] = -1.0
     with pytest.raises(InputError) as err:
-        language._as_histograms(bad, ("f0", "f2"))
+        rules._as_histograms(bad, ("f0", "f2"))
     assert err.value.source == "f2"
     bad[3][7] = np.nan
     with pytest.raises(InputError, match="non-finite"):
-        language._as_histograms(bad, ("f0", "f2"))
+        rules._as_histograms(bad, ("f0", "f2"))
 
 
 def test_coverage_is_the_same_turned_by_half_a_turn() -> None:
@@ -392,7 +393,7 @@ def test_coverage_is_the_same_turned_by_half_a_turn() -> None:
     for _ in range(300):
         n = int(rng.choice([8, 36, 180, 360]))
         h = rng.exponential(size=n) * (rng.random(n) < rng.random())
-        assert language._coverage(h, t) == language._coverage(np.roll(h, n // 2), t)
+        assert rules._coverage(h, t) == rules._coverage(np.roll(h, n // 2), t)
 
 
 def test_reversed_pair_is_rolled_by_half() -> None:

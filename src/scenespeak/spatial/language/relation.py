@@ -1,0 +1,113 @@
+"""The relation: where the argument is relative to the referent, words and numbers."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, fields
+from typing import Any
+
+__all__ = ["Relation"]
+
+
+@dataclass(frozen=True)
+class Relation:
+    """Where the argument is relative to the referent, in words and in the numbers behind them.
+
+    Attributes
+    ----------
+    argument, referent : str
+        Labels ("What is the relation of *argument* to *referent*?"). For viewer relations the
+        referent is ``"me"``.
+    primary : str
+        ``"left"``, ``"right"``, ``"front"``, ``"behind"`` or ``"surrounded"`` (also for "partly
+        surrounded"; see ``kind``). For a compound, the front/behind part. In viewer relations
+        the directions are the viewer's: ``"front"`` is farther from the camera.
+    secondary : str or None
+        One of the four directions, or None. For a compound, the left/right part.
+    hedge : str or None
+        ``"directly"``, ``"mostly"``, ``"loosely"`` or None (no hedge).
+    secondary_hedge : str or None
+        ``"somewhat"``, ``"slightly"``, ``"extends"`` or None.
+    kind : str
+        ``"direction"``, ``"compound"``, ``"surrounded"``, ``"partly surrounded"``,
+        ``"surrounds"`` or ``"partly surrounds"`` (the argument is the larger, enclosing object;
+        ``primary`` is then ``"surrounded"`` too): which horizontal rule produced the words.
+    sentence : str
+        The sentence to say. When ``vertical`` is set it is the vertical sentence ("The mug is
+        on top of the can."), otherwise ``horizontal_sentence``.
+    horizontal_sentence : str
+        The sentence of the horizontal rule set alone.
+    confidence : float
+        Self-assessment in [0, 1]: high when the winning degree is high and F0 and F2 agree.
+    degrees0, degrees2, degrees : dict of str to float
+        Degrees of truth of the four directions from F0, from F2 (or F02) and their mean.
+    deviation0, deviation2 : dict of str to float
+        Signed mean deviation (radians, counter-clockwise positive) of each histogram's
+        effective forces from each direction.
+    deviation : float
+        F2's deviation from the primary direction (radians); its sign picks the secondary side.
+    coverage : float
+        Fraction of directions covered by the smoothed F0 (the surround measure).
+    extends_share : float
+        Share of F0's mass within 45° of the secondary direction (the "extends" measure), 0
+        when there is no secondary.
+    overlap : float or None
+        area(A ∩ B) / area(A) when known (``relate`` computes it), else None.
+    referent_overlap : float or None
+        area(A ∩ B) / area(B) when known, else None.
+    vertical : str or None
+        ``"on top of"``, ``"above"``, ``"below"``, ``"under"`` or None.
+    hybrid : bool
+        True when ``f2`` was the hybrid F02 (touching or intersecting objects).
+    frame : str
+        ``"object"`` or ``"viewer"`` (the camera is the referent).
+    """
+
+    argument: str
+    referent: str
+    primary: str
+    secondary: str | None
+    hedge: str | None
+    sentence: str
+    confidence: float
+    secondary_hedge: str | None = None
+    kind: str = "direction"
+    horizontal_sentence: str = ""
+    degrees0: dict[str, float] = field(default_factory=dict)
+    degrees2: dict[str, float] = field(default_factory=dict)
+    degrees: dict[str, float] = field(default_factory=dict)
+    deviation0: dict[str, float] = field(default_factory=dict)
+    deviation2: dict[str, float] = field(default_factory=dict)
+    deviation: float = 0.0
+    coverage: float = 0.0
+    extends_share: float = 0.0
+    overlap: float | None = None
+    referent_overlap: float | None = None
+    vertical: str | None = None
+    hybrid: bool = False
+    frame: str = "object"
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready values; angles in degrees (``deviation_deg``, ``deviation0_deg``, ...).
+
+        Examples
+        --------
+        >>> h = np.zeros(180); h[90] = 1.0
+        >>> d = describe_relation(h, h, argument="mug", referent="can").to_dict()
+        >>> d["primary"], d["secondary"], d["sentence"]
+        ('left', None, 'The mug is directly to the left of the can.')
+        """
+        out: dict[str, Any] = {}
+        for f in fields(self):
+            value = getattr(self, f.name)
+            if f.name in ("deviation0", "deviation2"):
+                out[f"{f.name}_deg"] = {k: math.degrees(v) for k, v in value.items()}
+            elif f.name == "deviation":
+                out["deviation_deg"] = math.degrees(value)
+            elif isinstance(value, dict):
+                out[f.name] = {k: float(v) for k, v in value.items()}
+            elif isinstance(value, float):
+                out[f.name] = float(value)
+            else:
+                out[f.name] = value
+        return out
