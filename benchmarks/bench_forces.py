@@ -8,7 +8,7 @@ Prints median wall-clock times (one process, one thread) of F0 + F2:
 * how the time scales with the vertex count and with the number of directions,
 * the 10 pairs of a 5-object scene (convex hulls of 8-22 vertices, as the pipeline makes):
   one ``force_histograms`` call per pair against one sweep for all pairs
-  (``forces._many_f0_and_f2``, what ``language.relate_objects`` uses).
+  (``forces.prepare`` + ``forces.f0_f2_pairs``, what ``language.relate_objects`` uses).
 
 "F0+F2" is timed two ways: two calls of ``force_histogram`` (r=0, then r=2), and one call of
 ``force_histograms`` (both exponents sharing the validation and the sweep).
@@ -100,9 +100,9 @@ def masks() -> tuple[NDArray[np.bool_], NDArray[np.bool_]]:
 
 def polygon_vertices(mask: NDArray[np.bool_], tolerance: float) -> int:
     """Number of outline vertices a mask is traced into (private helper, for the table)."""
-    from scenespeak.spatial.forces import _mask_region
+    from scenespeak.spatial.forces import prepare
 
-    return len(_mask_region(mask, "mask", tolerance).start)
+    return len(prepare(mask, "mask", mask_tolerance=tolerance).start)
 
 
 def scene_hulls() -> list[Array]:
@@ -118,7 +118,7 @@ def scene_hulls() -> list[Array]:
 
 def scene_pairs(directions: int = 180) -> tuple[Callable[[], object], Callable[[], object]]:
     """(per pair, all pairs at once) F0+F2 of every unordered pair of :func:`scene_hulls`."""
-    from scenespeak.spatial.forces import _many_f0_and_f2, _polygon_region
+    from scenespeak.spatial.forces import f0_f2_pairs, prepare
 
     hulls = scene_hulls()
     index = [(i, j) for i in range(len(hulls)) for j in range(i + 1, len(hulls))]
@@ -127,8 +127,8 @@ def scene_pairs(directions: int = 180) -> tuple[Callable[[], object], Callable[[
         return [force_histograms(hulls[i], hulls[j], directions=directions) for i, j in index]
 
     def all_pairs() -> object:
-        regions = [_polygon_region(h, "hull") for h in hulls]
-        return _many_f0_and_f2([(regions[i], regions[j], True) for i, j in index], directions)
+        regions = [prepare(h, "hull") for h in hulls]
+        return f0_f2_pairs(regions, index, directions)
 
     return per_pair, all_pairs
 

@@ -552,9 +552,13 @@ def test_real_segmentation_coins() -> None:
     h = force_histogram(a, b, r=2.0, directions=360)
     got = int(np.argmax(h))
     assert min(abs(got - expected), 360 - abs(got - expected)) < 10
-    # role swap holds on real masks too
+    # role swap holds on real masks too (to rounding: the bins far from the peak are sums of
+    # terms of both signs, so their error is relative to the histogram's scale)
     np.testing.assert_allclose(
-        force_histogram(b, a, r=2.0, directions=360), np.roll(h, 180), rtol=1e-9
+        force_histogram(b, a, r=2.0, directions=360),
+        np.roll(h, 180),
+        rtol=1e-9,
+        atol=1e-11 * h.max(),
     )
 
 
@@ -664,7 +668,7 @@ def test_odd_direction_counts_sample_the_same_function(directions: int) -> None:
     a, b = regular(7, (2.5, 0.7), 0.9, 0.2), np.array([[0, 0], [1, 0], [0.2, 0.3], [0, 1.0]])
     odd = force_histogram(a, b, r=2.0, directions=directions)
     even = force_histogram(a, b, r=2.0, directions=2 * directions)
-    np.testing.assert_allclose(odd, even[::2], rtol=1e-12, atol=1e-15)
+    np.testing.assert_allclose(odd, even[::2], rtol=1e-10, atol=1e-15)
 
 
 def test_hybrid_kernel_against_direct_double_integral() -> None:

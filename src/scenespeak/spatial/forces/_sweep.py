@@ -1,0 +1,419 @@
+"""The force sweep as plain loops: the body of the compiled kernel (private).
+
+Written in the subset of Python that Numba compiles (:mod:`~scenespeak.spatial.forces.kernel`
+compiles it, with an on-disk cache); run by the interpreter it would be correct but very slow,
+so without Numba the package uses :mod:`~scenespeak.spatial.forces.reference` instead. The
+mathematics are the reference's (Matsakis & Wendling 1999; ``docs/forces.md``): for each
+direction, every (edge of A, edge of B) pair whose ranges of lines overlap contributes the
+closed-form integral ``w ∫ Φ⁺(s_A(v) - s_B(v)) dv``, a divided difference of ``Ψ``. What
+differs is the order of work, chosen for the hardware:
+
+* one direction at a time, all regions and all pairs: each region's edges are projected once
+  per direction (not once per pair) into a small table sorted by the lower end of the edge's
+  range of lines, kept sorted from one direction to the next by insertion sort (the order
+  changes little between neighbouring directions);
+* a pair is skipped before any per-edge work when the two regions' ranges of lines are apart
+  in that direction (no line meets both);
+* the overlapping edge pairs come from a two-pointer walk over the two sorted tables (each pair
+  with an overlap of positive length exactly once), and are integrated on the spot: nothing of
+  size "pairs × edges" is ever stored, memory is linear in regions' edges plus pairs' output.
+
+Kernel codes (``codes[k]``): 0 constant forces ``r = 0``; 1 gravitational ``r = 2``; 2 hybrid
+F02 ``1 / max(d, y0)**2`` with ``y0`` per pair; 3 any other ``r`` (``rs[k]``).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from typing import TypeVar
+
+import numpy as np
+
+from scenespeak.spatial.forces._jit import jit
+
+F = TypeVar("F", bound=Callable[..., object])
+
+# Below this |h| / |m| the divided difference of Ψ is replaced by its Taylor series (the
+# reference's _TAYLOR_RATIO).
+TAYLOR_RATIO = 1e-3
+
+
+@jit
+def _psi(code: int, r: float, y0: float, u: float) -> float:
+    """Ψ(u) for u > 0 (Ψ' = Φ, Φ'' = φ; reference ``_Kernel.psi``)."""
+    if code == 0:
+        return u * u * u / 6.0
+    if code == 1:
+        return u - u * math.log(u)
+    if code == 2:
+        if u <= y0:
+            return u * u * u / (6.0 * y0 * y0)
+        return u * u / y0 - 0.5 * u - u * math.log(u / y0) - y0 / 3.0
+    if r == 1.0:
+        return 0.5 * u * u * math.log(u) - 0.25 * u * u
+    if r == 3.0:
+        return 0.5 * math.log(u)
+    return u ** (3.0 - r) / ((1.0 - r) * (2.0 - r) * (3.0 - r))
+
+
+@jit
+def _big_phi(code: int, r: float, y0: float, u: float) -> float:
+    """Φ(u) for u > 0 (reference ``_Kernel.big_phi``)."""
+    if code == 0:
+        return 0.5 * u * u
+    if code == 1:
+        return -math.log(u)
+    if code == 2:
+        if u <= y0:
+            return u * u / (2.0 * y0 * y0)
+        return 2.0 * u / y0 - 1.5 - math.log(u / y0)
+    if r == 1.0:
+        return u * math.log(u)
+    if r == 2.0:
+        return -math.log(u)
+    return u ** (2.0 - r) / ((1.0 - r) * (2.0 - r))
+
+
+@jit
+def _force(code: int, r: float, y0: float, u: float) -> float:
+    """φ(u) = u**-r, or 1 / max(u, y0)**2 (reference ``_Kernel.force``)."""
+    if code == 0:
+        return 1.0
+    if code == 1:
+        return 1.0 / (u * u)
+    if code == 2:
+        m = u if u > y0 else y0
+        return 1.0 / (m * m)
+    return u ** (-r)
+
+
+@jit
+def _mean_phi(code: int, r: float, y0: float, a0: float, a1: float) -> float:
+    """Mean of Φ⁺ over an interval where the gap goes linearly from a0 to a1 (>= 0).
+
+    For constant forces the mean of ``u²/2`` is ``(a0² + a0 a1 + a1²) / 6`` exactly (the
+    reference's divided difference and Taylor branch, without their rounding).
+    """
+    if code == 0:
+        return (a0 * a0 + a0 * a1 + a1 * a1) / 6.0
+    h = a1 - a0
+    m = 0.5 * (a0 + a1)
+    if abs(h) <= TAYLOR_RATIO * m:
+        if m > 0.0:
+            return _big_phi(code, r, y0, m) + _force(code, r, y0, m) * h * h / 24.0
+        return 0.0
+    p0 = _psi(code, r, y0, a0) if a0 > 0.0 else 0.0
+    p1 = _psi(code, r, y0, a1) if a1 > 0.0 else 0.0
+    return (p1 - p0) / h
+
+
+@jit
+def _tables(
+    c: float,
+    s: float,
+    pts: np.ndarray,
+    nxt: np.ndarray,
+    region_start: np.ndarray,
+    perm: np.ndarray,
+    first: bool,
+    tab: np.ndarray,
+    extent: np.ndarray,
+) -> None:
+    """Every region's edge table for direction (c, s), each sorted by the edge's ``v_lo``.
+
+    ``tab[e]`` is ``[v_lo, v_hi, s(v_lo), ds/dv, sign(dv)]`` of edge ``e``; ``perm`` lists
+    each region's edges by ``v_lo`` in its own
+    region's frame (``pts`` are relative to the region's origin); ``extent[g]`` is region g's
+    range of ``v``.
+    """
+    n_regions = region_start.size - 1
+    for g in range(n_regions):
+        lo_g = region_start[g]
+        hi_g = region_start[g + 1]
+        vmin = math.inf
+        vmax = -math.inf
+        for e in range(lo_g, hi_g):
+            f = nxt[e]
+            s0 = pts[e, 0] * c + pts[e, 1] * s
+            v0 = pts[e, 1] * c - pts[e, 0] * s
+            s1 = pts[f, 0] * c + pts[f, 1] * s
+            v1 = pts[f, 1] * c - pts[f, 0] * s
+            dv = v1 - v0
+            if dv < 0.0:
+                tab[e, 0] = v1
+                tab[e, 1] = v0
+                tab[e, 2] = s1
+                tab[e, 4] = -1.0
+            else:
+                tab[e, 0] = v0
+                tab[e, 1] = v1
+                tab[e, 2] = s0
+                tab[e, 4] = 1.0 if dv > 0.0 else 0.0
+            tab[e, 3] = (s1 - s0) / dv if dv != 0.0 else 0.0
+            if v0 < vmin:
+                vmin = v0
+            if v0 > vmax:
+                vmax = v0
+        extent[g, 0] = vmin
+        extent[g, 1] = vmax
+        # Keep perm[lo_g:hi_g] sorted by v_lo: a full sort the first time, then insertion
+        # sort from the previous direction's order (few inversions between neighbours).
+        if first:
+            order = np.argsort(tab[lo_g:hi_g, 0])
+            for j in range(hi_g - lo_g):
+                perm[lo_g + j] = lo_g + order[j]
+        else:
+            for j in range(lo_g + 1, hi_g):
+                key = perm[j]
+                kv = tab[key, 0]
+                i = j - 1
+                while i >= lo_g and tab[perm[i], 0] > kv:
+                    perm[i + 1] = perm[i]
+                    i -= 1
+                perm[i + 1] = key
+
+
+@jit
+def _collect(
+    tab: np.ndarray,
+    perm: np.ndarray,
+    a0: int,
+    a1: int,
+    b0: int,
+    b1: int,
+    dvb: float,
+    buf: np.ndarray,
+) -> int:
+    """The overlapping edge pairs of two regions in one direction, into ``buf`` (two pointers).
+
+    Case 1: for each A-edge, the B-edges with ``lo_a <= lo_b < hi_a``; case 2: for each B-edge,
+    the A-edges with ``lo_b < lo_a < hi_b``. Every pair whose ranges overlap on a positive
+    length is in exactly one of them. Returns the number of pairs, or minus the number needed
+    when ``buf`` is too small.
+    """
+    size = buf.shape[0]
+    count = 0
+    j = b0
+    for i in range(a0, a1):
+        ea = perm[i]
+        lo_a = tab[ea, 0]
+        hi_a = tab[ea, 1]
+        while j < b1 and tab[perm[j], 0] + dvb < lo_a:
+            j += 1
+        jj = j
+        while jj < b1 and tab[perm[jj], 0] + dvb < hi_a:
+            if count < size:
+                buf[count, 0] = ea
+                buf[count, 1] = perm[jj]
+            count += 1
+            jj += 1
+    i = a0
+    for j in range(b0, b1):
+        eb = perm[j]
+        lo_b = tab[eb, 0] + dvb
+        hi_b = tab[eb, 1] + dvb
+        while i < a1 and tab[perm[i], 0] <= lo_b:
+            i += 1
+        ii = i
+        while ii < a1 and tab[perm[ii], 0] < hi_b:
+            if count < size:
+                buf[count, 0] = perm[ii]
+                buf[count, 1] = eb
+            count += 1
+            ii += 1
+    return count if count <= size else -count
+
+
+@jit
+def _integrate(
+    tab: np.ndarray,
+    buf: np.ndarray,
+    count: int,
+    shift: tuple[float, float],
+    codes: np.ndarray,
+    rs: np.ndarray,
+    y0: float,
+    acc: np.ndarray,
+) -> None:
+    """Add the integrals of ``count`` edge pairs into ``acc[0, k]`` (θ) and ``acc[1, k]`` (θ+π).
+
+    Pair (A edge e, B edge f), B shifted into A's frame by ``shift = (dv, ds)``: on the common
+    range of lines ``[lo, hi]`` the gap ``d(v) = s_A(v) - s_B(v)`` is linear; the pair weighs
+    ``sign_e sign_f (lo - hi)`` (A-edges count + where they leave A, B-edges + where they enter
+    B) times the mean of Φ⁺(d) over the range, and serves θ where d > 0, θ + π where d < 0 (a
+    pair whose gap changes sign is split at the zero).
+    """
+    dvb, dsb = shift
+    n_k = codes.size
+    for q in range(count):
+        e = buf[q, 0]
+        f = buf[q, 1]
+        lo_a = tab[e, 0]
+        lo_b = tab[f, 0] + dvb
+        hi_a = tab[e, 1]
+        hi_b = tab[f, 1] + dvb
+        lo = lo_a if lo_a > lo_b else lo_b
+        hi = hi_a if hi_a < hi_b else hi_b
+        if not hi > lo:
+            continue
+        s_a = tab[e, 2]
+        k_a = tab[e, 3]
+        s_b = tab[f, 2] + dsb
+        k_b = tab[f, 3]
+        d0 = (s_a + k_a * (lo - lo_a)) - (s_b + k_b * (lo - lo_b))
+        d1 = (s_a + k_a * (hi - lo_a)) - (s_b + k_b * (hi - lo_b))
+        weight = (tab[e, 4] * tab[f, 4]) * (lo - hi)
+        if d0 * d1 < 0.0:
+            top = d0 if d0 > d1 else d1
+            bottom = d1 if d0 > d1 else d0
+            frac = top / (abs(d0) + abs(d1))
+            for k in range(n_k):
+                acc[0, k] += weight * frac * _mean_phi(codes[k], rs[k], y0, 0.0, top)
+                acc[1, k] += weight * (1.0 - frac) * _mean_phi(codes[k], rs[k], y0, 0.0, -bottom)
+        elif d0 + d1 < 0.0:
+            for k in range(n_k):
+                acc[1, k] += weight * _mean_phi(codes[k], rs[k], y0, -d0, -d1)
+        else:
+            for k in range(n_k):
+                acc[0, k] += weight * _mean_phi(codes[k], rs[k], y0, d0, d1)
+
+
+@jit
+def sweep(
+    pts: np.ndarray,
+    nxt: np.ndarray,
+    region_start: np.ndarray,
+    origin: np.ndarray,
+    pair_a: np.ndarray,
+    pair_b: np.ndarray,
+    y0: np.ndarray,
+    codes: np.ndarray,
+    rs: np.ndarray,
+    directions: int,
+) -> np.ndarray:
+    """Force histograms of many pairs of regions, shape ``(pairs, kernels, directions)``.
+
+    Parameters
+    ----------
+    pts : (E, 2) float
+        Every region's vertices, region after region, each relative to its ``origin``.
+    nxt : (E,) int
+        Global index of the next vertex along the boundary (edge e runs e → nxt[e]).
+    region_start : (G + 1,) int
+        Region g owns vertices ``region_start[g]:region_start[g + 1]``.
+    origin : (G, 2) float
+        Each region's origin (absolute coordinates).
+    pair_a, pair_b : (P,) int
+        The argument and referent region of each pair.
+    y0 : (P,) float
+        The hybrid kernel's ``Y0`` of each pair (read for code 2 only).
+    codes, rs : (K,)
+        The kernels (see the module docstring).
+    directions : int
+        Histogram bins; with an even number only half are swept (``F(θ + π)`` from the
+        same pairs through ``Φ⁺(-d)``); with an odd number the θ + π parts are dropped.
+    """
+    n_pairs = pair_a.size
+    n_k = codes.size
+    both = directions % 2 == 0
+    half = directions // 2 if both else directions
+    out = np.zeros((n_pairs, n_k, directions))
+    tab = np.empty((pts.shape[0], 5))
+    perm = np.empty(pts.shape[0], dtype=np.int64)
+    extent = np.empty((region_start.size - 1, 2))
+    buf = np.empty((1024, 2), dtype=np.int64)
+    acc = np.empty((2, n_k))
+    for d in range(half):
+        theta = 2.0 * math.pi * d / directions
+        c = math.cos(theta)
+        s = math.sin(theta)
+        _tables(c, s, pts, nxt, region_start, perm, d == 0, tab, extent)
+        for p in range(n_pairs):
+            ga = pair_a[p]
+            gb = pair_b[p]
+            ox = origin[gb, 0] - origin[ga, 0]
+            oy = origin[gb, 1] - origin[ga, 1]
+            dvb = oy * c - ox * s
+            if extent[ga, 1] < extent[gb, 0] + dvb or extent[gb, 1] + dvb < extent[ga, 0]:
+                continue  # no line of this direction meets both objects
+            a0, a1 = region_start[ga], region_start[ga + 1]
+            b0, b1 = region_start[gb], region_start[gb + 1]
+            count = _collect(tab, perm, a0, a1, b0, b1, dvb, buf)
+            if count < 0:
+                buf = np.empty((2 * -count, 2), dtype=np.int64)
+                count = _collect(tab, perm, a0, a1, b0, b1, dvb, buf)
+            acc[:] = 0.0
+            _integrate(tab, buf, count, (dvb, ox * c + oy * s), codes, rs, y0[p], acc)
+            for k in range(n_k):
+                out[p, k, d] += acc[0, k]
+                if both:
+                    out[p, k, d + half] += acc[1, k]
+    return out
+
+
+@jit
+def _point_segment(px: float, py: float, ax: float, ay: float, bx: float, by: float) -> float:
+    """Distance from point p to segment ab (``geometry.polygons.segment_distances``)."""
+    ex = bx - ax
+    ey = by - ay
+    den = ex * ex + ey * ey
+    t = ((px - ax) * ex + (py - ay) * ey) / den if den > 0.0 else 0.0
+    t = min(max(t, 0.0), 1.0)
+    dx = px - ax - t * ex
+    dy = py - ay - t * ey
+    return math.sqrt(dx * dx + dy * dy)
+
+
+@jit
+def _segments_near(p: np.ndarray, q: np.ndarray, i: int, j: int, tol: float) -> bool:
+    """Whether segments i and j of (p, q) cross or come within ``tol``."""
+    d1 = (q[j, 0] - p[j, 0]) * (p[i, 1] - p[j, 1]) - (q[j, 1] - p[j, 1]) * (p[i, 0] - p[j, 0])
+    d2 = (q[j, 0] - p[j, 0]) * (q[i, 1] - p[j, 1]) - (q[j, 1] - p[j, 1]) * (q[i, 0] - p[j, 0])
+    d3 = (q[i, 0] - p[i, 0]) * (p[j, 1] - p[i, 1]) - (q[i, 1] - p[i, 1]) * (p[j, 0] - p[i, 0])
+    d4 = (q[i, 0] - p[i, 0]) * (q[j, 1] - p[i, 1]) - (q[i, 1] - p[i, 1]) * (q[j, 0] - p[i, 0])
+    if d1 * d2 < 0.0 and d3 * d4 < 0.0:
+        return True
+    dist = min(
+        _point_segment(p[i, 0], p[i, 1], p[j, 0], p[j, 1], q[j, 0], q[j, 1]),
+        _point_segment(q[i, 0], q[i, 1], p[j, 0], p[j, 1], q[j, 0], q[j, 1]),
+        _point_segment(p[j, 0], p[j, 1], p[i, 0], p[i, 1], q[i, 0], q[i, 1]),
+        _point_segment(q[j, 0], q[j, 1], p[i, 0], p[i, 1], q[i, 0], q[i, 1]),
+    )
+    return dist <= tol
+
+
+@jit
+def first_contact(p: np.ndarray, q: np.ndarray, tol: float) -> np.ndarray:
+    """The first pair ``(i, j)``, ``i < j`` non-adjacent, of edges ``p → q`` that cross or touch.
+
+    ``[-1, -1]`` when the closed polygon is simple. Edges sorted by their smallest x; each is
+    compared only with the edges whose x-range can reach it (bounding boxes within ``tol``),
+    so the cost is near ``n log n`` for ordinary outlines. "First" is the smallest ``(i, j)``
+    in lexicographic order, as the NumPy check reports it.
+    """
+    n = p.shape[0]
+    xlo = np.minimum(p[:, 0], q[:, 0]) - tol
+    xhi = np.maximum(p[:, 0], q[:, 0]) + tol
+    ylo = np.minimum(p[:, 1], q[:, 1]) - tol
+    yhi = np.maximum(p[:, 1], q[:, 1]) + tol
+    order = np.argsort(xlo)
+    best = np.array([-1, -1], dtype=np.int64)
+    for a in range(n):
+        i0 = order[a]
+        for b in range(a + 1, n):
+            j0 = order[b]
+            if xlo[j0] > xhi[i0]:
+                break
+            if ylo[j0] > yhi[i0] or ylo[i0] > yhi[j0]:
+                continue
+            i = min(i0, j0)
+            j = max(i0, j0)
+            if j < i + 2 or (i == 0 and j == n - 1):
+                continue
+            if best[0] >= 0 and (i > best[0] or (i == best[0] and j >= best[1])):
+                continue
+            if _segments_near(p, q, i, j, tol):
+                best[0] = i
+                best[1] = j
+    return best

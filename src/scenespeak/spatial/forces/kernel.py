@@ -1,0 +1,146 @@
+"""One entry point for the force sweep: the compiled kernel, or the NumPy reference.
+
+:func:`sweep_pairs` takes prepared regions, the pairs to compute and the kernels, and returns
+every pair's histograms. With Numba installed (the ``fast`` extra) it runs the compiled loops of
+:mod:`~scenespeak.spatial.forces._sweep` (all pairs of a scene in one call, one direction at a
+time, each region projected once per direction); without it, or with ``SCENESPEAK_NO_NUMBA=1``,
+the NumPy reference of :mod:`~scenespeak.spatial.forces.reference`. Both give the same
+histograms to rounding (``tests/spatial/test_forces_kernel.py`` pins 1e-9 relative to each
+histogram's largest bin).
+
+Why Numba and not a C/C++ or Rust extension: the package is pure Python and installs from a
+source checkout with ``pip install`` anywhere; an extension would need a compiler on the user's
+machine or a wheel per platform and Python version built and published by CI. Numba ships
+wheels for every platform NumPy does, compiles for the CPU it runs on (AVX-512 here), and its
+on-disk cache makes the compile a one-time cost (see ``docs/forces.md`` for the measured
+cold/warm start-up). Its absence costs speed, never correctness.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from scenespeak.spatial.forces import _jit
+from scenespeak.spatial.forces.regions import Region
+
+FloatArray = NDArray[np.float64]
+
+__all__ = ["KernelSpec", "compiled", "sweep_pairs"]
+
+
+@dataclass(frozen=True)
+class KernelSpec:
+    """An elementary force: ``d**-r`` (``hybrid`` False) or ``1 / max(d, Y0)**2`` (True).
+
+    The hybrid kernel's ``Y0`` is given per pair to :func:`sweep_pairs`.
+    """
+
+    r: float
+    hybrid: bool = False
+
+    @property
+    def code(self) -> int:
+        if self.hybrid:
+            return 2
+        if self.r == 0.0:
+            return 0
+        if self.r == 2.0:
+            return 1
+        return 3
+
+
+def compiled() -> bool:
+    """Whether the compiled kernel is used (Numba importable and not disabled).
+
+    Examples
+    --------
+    >>> isinstance(compiled(), bool)
+    True
+    """
+    return _jit.available()
+
+
+def _reference(
+    regions: Sequence[Region],
+    pairs: Sequence[tuple[int, int]],
+    kernels: Sequence[KernelSpec],
+    y0: Sequence[float],
+    directions: int,
+) -> FloatArray:
+    from scenespeak.spatial.forces.reference import _edge_pair_histograms, _Kernel
+
+    out = np.empty((len(pairs), len(kernels), directions))
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        for p, (i, j) in enumerate(pairs):
+            ks = [_Kernel(k.r, y0[p] if k.hybrid else 0.0) for k in kernels]
+            out[p] = _edge_pair_histograms(regions[i], regions[j], ks, directions)
+    return out
+
+
+def _packed(
+    regions: Sequence[Region],
+) -> tuple[FloatArray, NDArray[np.int64], NDArray[np.int64], FloatArray]:
+    """The regions' vertices end to end, each relative to its first vertex."""
+    sizes = np.array([len(r.start) for r in regions], dtype=np.int64)
+    region_start = np.zeros(len(regions) + 1, dtype=np.int64)
+    np.cumsum(sizes, out=region_start[1:])
+    origin = np.array([r.start[0] for r in regions], dtype=np.float64).reshape(-1, 2)
+    pts = np.concatenate([r.start for r in regions]) - np.repeat(origin, sizes, axis=0)
+    nxt = np.concatenate([r.nxt + region_start[g] for g, r in enumerate(regions)])
+    return pts, nxt.astype(np.int64), region_start, origin
+
+
+def sweep_pairs(
+    regions: Sequence[Region],
+    pairs: Sequence[tuple[int, int]],
+    kernels: Sequence[KernelSpec],
+    directions: int,
+    y0: Sequence[float] | None = None,
+) -> FloatArray:
+    """Force histograms of ``pairs`` of ``regions``, shape ``(len(pairs), len(kernels), D)``.
+
+    Parameters
+    ----------
+    regions : sequence of Region
+        Prepared objects (:func:`~scenespeak.spatial.forces.prepare`).
+    pairs : sequence of (int, int)
+        ``(argument, referent)`` indices into ``regions``.
+    kernels : sequence of KernelSpec
+    directions : int
+        Histogram bins; ``h[..., k]`` is the value at angle ``2*pi*k/directions``.
+    y0 : sequence of float, optional
+        Each pair's ``Y0`` for hybrid kernels.
+
+    Returns
+    -------
+    numpy.ndarray
+        Not checked for finiteness (``F_r`` of touching objects may be infinite for r >= 2).
+    """
+    y0_arr = np.zeros(len(pairs)) if y0 is None else np.asarray(y0, dtype=np.float64)
+    if not pairs:
+        return np.zeros((0, len(kernels), directions))
+    if not _jit.available():
+        return _reference(regions, pairs, kernels, list(y0_arr), directions)
+    from scenespeak.spatial.forces._sweep import sweep
+
+    pts, nxt, region_start, origin = _packed(regions)
+    index = np.asarray(pairs, dtype=np.int64).reshape(-1, 2)
+    codes = np.array([k.code for k in kernels], dtype=np.int64)
+    rs = np.array([k.r for k in kernels], dtype=np.float64)
+    out: FloatArray = sweep(
+        pts,
+        nxt,
+        region_start,
+        origin,
+        np.ascontiguousarray(index[:, 0]),
+        np.ascontiguousarray(index[:, 1]),
+        y0_arr,
+        codes,
+        rs,
+        int(directions),
+    )
+    return out

@@ -1,0 +1,228 @@
+"""The compiled force kernel against the NumPy reference, and its fallbacks.
+
+The reference (``scenespeak.spatial.forces.reference``) is the specification; the kernel must
+give the same histograms to 1e-9 relative to each histogram's largest bin (bins far below the
+peak are sums of terms of both signs, so their rounding error is relative to the peak, not to
+themselves). Without Numba the package must run the reference, and a cache directory that
+cannot be written must not stop it.
+"""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+import textwrap
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from numpy.typing import NDArray
+from skimage.draw import polygon as raster_polygon
+
+from scenespeak.errors import InputError
+from scenespeak.spatial import forces
+from scenespeak.spatial.forces import _jit, kernel
+from scenespeak.spatial.forces.reference import _edge_pair_histograms, _Kernel
+
+Array = NDArray[np.float64]
+
+pytestmark = pytest.mark.skipif(not _jit.available(), reason="numba is not installed")
+
+KERNELS = [
+    (kernel.KernelSpec(0.0), _Kernel(0.0)),
+    (kernel.KernelSpec(2.0), _Kernel(2.0)),
+    (kernel.KernelSpec(0.5), _Kernel(0.5)),
+    (kernel.KernelSpec(1.0), _Kernel(1.0)),
+    (kernel.KernelSpec(3.0), _Kernel(3.0)),
+    (kernel.KernelSpec(1.5), _Kernel(1.5)),
+]
+
+
+def star(rng: np.random.Generator, n: int, centre: Array, radius: float) -> Array:
+    # Jittered regular angles: every gap below pi, so the polygon is simple (star-shaped).
+    n = max(n, 4)
+    ang = 2 * np.pi * (np.arange(n) + 0.9 * rng.uniform(0, 1, n)) / n
+    rad = rng.uniform(0.4 * radius, radius, n)
+    return np.column_stack([centre[0] + rad * np.cos(ang), centre[1] + rad * np.sin(ang)])
+
+
+def assert_close(got: Array, ref: Array, rel: float = 1e-9) -> None:
+    scale = np.abs(ref).max(axis=-1, keepdims=True)
+    err = np.abs(got - ref) / np.where(scale > 0, scale, 1.0)
+    assert float(err.max(initial=0.0)) <= rel, float(err.max())
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    seed=st.integers(0, 2**31),
+    n=st.integers(3, 40),
+    m=st.integers(3, 40),
+    directions=st.sampled_from([36, 90, 180, 181, 45, 37]),
+)
+def test_kernel_matches_reference_on_disjoint_stars(
+    seed: int, n: int, m: int, directions: int
+) -> None:
+    rng = np.random.default_rng(seed)
+    a = forces.prepare(star(rng, n, np.zeros(2), 1.0), "a")
+    gap = rng.uniform(2.2, 6.0)
+    angle = rng.uniform(0, 2 * np.pi)
+    b = forces.prepare(star(rng, m, gap * np.array([np.cos(angle), np.sin(angle)]), 1.0), "b")
+    specs = [k for k, _ in KERNELS]
+    got = kernel.sweep_pairs([a, b], [(0, 1)], specs, directions)[0]
+    with np.errstate(all="ignore"):
+        ref = _edge_pair_histograms(a, b, [r for _, r in KERNELS], directions)
+    assert_close(got, ref)
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    seed=st.integers(0, 2**31),
+    shift=st.tuples(st.floats(-1.2, 1.2), st.floats(-1.2, 1.2)),
+    directions=st.sampled_from([36, 180, 37]),
+)
+def test_kernel_matches_reference_on_overlapping_objects(
+    seed: int, shift: tuple[float, float], directions: int
+) -> None:
+    """Overlapping objects: F0, r = 0.5 and the hybrid F02 (defined there)."""
+    rng = np.random.default_rng(seed)
+    a = forces.prepare(star(rng, int(rng.integers(3, 30)), np.zeros(2), 1.0), "a")
+    b = forces.prepare(star(rng, int(rng.integers(3, 30)), np.array(shift), 1.0), "b")
+    y0 = float(rng.uniform(0.01, 0.5))
+    specs = [kernel.KernelSpec(0.0), kernel.KernelSpec(0.5), kernel.KernelSpec(2.0, hybrid=True)]
+    got = kernel.sweep_pairs([a, b], [(0, 1)], specs, directions, [y0])[0]
+    with np.errstate(all="ignore"):
+        kernels = [_Kernel(0.0), _Kernel(0.5), _Kernel(2.0, y0)]
+        ref = _edge_pair_histograms(a, b, kernels, directions)
+    assert_close(got, ref)
+
+
+def test_kernel_matches_reference_on_masks() -> None:
+    shape = (256, 256)
+    rng = np.random.default_rng(3)
+    masks = []
+    for centre in ((70.0, -80.0), (180.0, -170.0)):
+        p = star(rng, 60, np.array(centre), 60.0)
+        mask = np.zeros(shape, bool)
+        rr, cc = raster_polygon(-p[:, 1], p[:, 0], shape)
+        mask[rr, cc] = True
+        masks.append(mask)
+    a, b = (forces.prepare(m, name) for m, name in zip(masks, "ab", strict=True))
+    specs = [kernel.KernelSpec(0.0), kernel.KernelSpec(2.0)]
+    got = kernel.sweep_pairs([a, b], [(0, 1)], specs, 180)
+    ref = _edge_pair_histograms(a, b, [_Kernel(0.0), _Kernel(2.0)], 180)
+    assert_close(got[0], ref)
+
+
+def test_all_pairs_in_one_call_equal_each_pair_alone() -> None:
+    """A pair's histograms do not depend on which other pairs share the call."""
+    rng = np.random.default_rng(8)
+    regions = [
+        forces.prepare(star(rng, int(rng.integers(3, 25)), rng.uniform(-6, 6, 2), 1.0), f"o{k}")
+        for k in range(7)
+    ]
+    pairs = [(i, j) for i in range(7) for j in range(7) if i != j]
+    specs = [kernel.KernelSpec(0.0), kernel.KernelSpec(0.5)]
+    together = kernel.sweep_pairs(regions, pairs, specs, 36)
+    for k, (i, j) in enumerate(pairs):
+        alone = kernel.sweep_pairs([regions[i], regions[j]], [(0, 1)], specs, 36)[0]
+        np.testing.assert_array_equal(together[k], alone)
+
+
+def test_f0_f2_pairs_match_the_public_functions() -> None:
+    rng = np.random.default_rng(11)
+    polys = [star(rng, int(rng.integers(3, 20)), rng.uniform(-3, 3, 2), 1.0) for _ in range(6)]
+    regions = [forces.prepare(p, f"o{k}") for k, p in enumerate(polys)]
+    got = forces.f0_f2_pairs(regions, directions=36)
+    pairs = [(i, j) for i in range(6) for j in range(i + 1, 6)]
+    assert got.f0.shape == (len(pairs), 36)
+    for k, (i, j) in enumerate(pairs):
+        try:
+            f0, f2 = forces.force_histograms(polys[i], polys[j], directions=36)
+            hybrid = not np.all(np.isfinite(f2))
+        except InputError:
+            hybrid = True
+        if hybrid:
+            f0 = forces.force_histogram(polys[i], polys[j], r=0.0, directions=36)
+            f2 = forces.hybrid_histogram(polys[i], polys[j], directions=36)
+        assert bool(got.hybrid[k]) == hybrid
+        np.testing.assert_array_equal(got.f0[k], f0)
+        np.testing.assert_array_equal(got.f2[k], f2)
+
+
+def test_without_numba_the_reference_runs(monkeypatch: pytest.MonkeyPatch) -> None:
+    rng = np.random.default_rng(5)
+    a, b = star(rng, 12, np.zeros(2), 1.0), star(rng, 9, np.array([3.0, 1.0]), 1.0)
+    compiled = forces.force_histograms(a, b, directions=90)
+    bow = np.array([[0.0, 0.0], [2.0, 0.0], [0.0, 1.0], [2.0, 1.0], [1.0, 3.0]])
+    with pytest.raises(InputError, match="cross or touch") as err:
+        forces.prepare(bow, "bow")
+    message = str(err.value)
+    monkeypatch.setattr(_jit, "available", lambda: False)
+    assert not forces.compiled()
+    plain = forces.force_histograms(a, b, directions=90)
+    ra, rb = forces.prepare(a, "a"), forces.prepare(b, "b")
+    ref = _edge_pair_histograms(ra, rb, [_Kernel(0.0), _Kernel(2.0)], 90)
+    np.testing.assert_array_equal(plain, ref)
+    assert_close(compiled, ref)
+    # the simplicity check has a NumPy path too, with the same message
+    with pytest.raises(InputError) as err:
+        forces.prepare(bow, "bow")
+    assert str(err.value) == message
+
+
+def _run(code: str, env: dict[str, str]) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(
+        [sys.executable, "-c", textwrap.dedent(code)],
+        env={**os.environ, **env},
+        capture_output=True,
+        text=True,
+        timeout=300,
+        check=False,
+    )
+
+
+def test_numba_disabled_process_never_imports_it() -> None:
+    out = _run(
+        """
+        import sys
+        import numpy as np
+        from scenespeak.spatial.forces import force_histograms, compiled
+        sq = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
+        h = force_histograms(sq + [3.0, 0.0], sq, directions=8)
+        print(compiled(), "numba" in sys.modules, round(float(h[0, 0]), 12))
+        """,
+        {_jit.DISABLE_ENV: "1"},
+    )
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.split() == ["False", "False", "1.0"]
+
+
+def test_importing_the_package_does_not_import_numba() -> None:
+    out = _run(
+        "import sys, scenespeak.spatial.forces, scenespeak.forces; print('numba' in sys.modules)",
+        {},
+    )
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.strip() == "False"
+
+
+@pytest.mark.slow
+def test_unwritable_cache_directory_does_not_crash(tmp_path: os.PathLike[str]) -> None:
+    """A cache path that cannot be created (here: below a regular file) is not an error."""
+    blocker = os.path.join(tmp_path, "file")
+    with open(blocker, "w") as f:
+        f.write("not a directory")
+    out = _run(
+        """
+        import numpy as np
+        from scenespeak.spatial.forces import force_histograms, compiled
+        sq = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
+        h = force_histograms(sq + [3.0, 0.0], sq, directions=8)
+        print(compiled(), round(float(h[0, 0]), 12))
+        """,
+        {"NUMBA_CACHE_DIR": os.path.join(blocker, "cache")},
+    )
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.split() == ["True", "1.0"]
