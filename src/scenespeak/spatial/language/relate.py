@@ -129,7 +129,7 @@ def _prepared_regions(polygons: Sequence[NDArray[np.float64]], labels: Sequence[
     regions: list[Any] = []
     for p, label in zip(polygons, labels, strict=True):
         try:
-            regions.append(forces._polygon_region(p, label))
+            regions.append(forces.prepare(p, label))
         except ScenespeakError:
             regions.append(None)
     return regions
@@ -159,11 +159,18 @@ def _scene_pairs(
     prepared = [
         k for k, (i, j) in enumerate(index) if regions[i] is not None and regions[j] is not None
     ]
-    swept = forces._many_f0_and_f2(
-        [(regions[index[k][0]], regions[index[k][1]], not intersecting[k]) for k in prepared],
+    # Regions that failed to prepare are None: only the others go to the sweep.
+    usable = [r for r in regions if r is not None]
+    slot = {id(r): g for g, r in enumerate(usable)}
+    swept = forces.f0_f2_pairs(
+        usable,
+        [(slot[id(regions[index[k][0]])], slot[id(regions[index[k][1]])]) for k in prepared],
         directions,
+        try_f2=[not intersecting[k] for k in prepared],
     )
-    histograms = dict(zip(prepared, swept, strict=True))
+    histograms = {
+        k: (swept.f0[q], swept.f2[q], bool(swept.hybrid[q])) for q, k in enumerate(prepared)
+    }
     raw: list[NDArray[np.float64]] = []
     hybrids: list[bool] = []
     for k, (i, j) in enumerate(index):
