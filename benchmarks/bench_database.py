@@ -38,8 +38,8 @@ import numpy as np
 from numpy.typing import NDArray
 from skimage import data
 
-from scenespeak.perception.database import ExactIndex, ObjectDatabase
 from scenespeak.perception.features import Features, detect, to_gray
+from scenespeak.perception.recognition import ExactIndex, ObjectDatabase
 
 FILLER_PHOTOS = (
     "camera",

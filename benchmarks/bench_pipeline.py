@@ -43,9 +43,9 @@ from typing import Any
 import numpy as np
 
 from scenespeak.perception.calibration import load_rig
-from scenespeak.perception.database import ObjectDatabase
 from scenespeak.perception.features import detect, load_image, to_gray
 from scenespeak.perception.objects import project_to_plane
+from scenespeak.perception.recognition import ObjectDatabase
 from scenespeak.pipeline import database_from_dataset, describe_scene
 
 BANDS = ((0.5, 1.0), (1.0, 1.5), (1.5, 2.0), (2.0, 9.0))

@@ -22,8 +22,8 @@ import pytest
 from cardscene import BASELINE, HFOV, H, W, card_pair, photo
 from scenespeak.errors import DatabaseError, ImageError
 from scenespeak.perception.calibration import rig_from_short
-from scenespeak.perception.database import ObjectDatabase
 from scenespeak.perception.objects import SceneObject, project_to_plane
+from scenespeak.perception.recognition import ObjectDatabase
 from scenespeak.pipeline import SceneDescription, describe_files, describe_scene
 
 _photo = photo

@@ -7,7 +7,7 @@ stage's result in a frozen :class:`SceneDescription`:
    (:func:`scenespeak.perception.stereo.stereo_points`; SIFT runs once per image and the left
    features are reused for labelling);
 2. labelling of the left keypoints against the database (ratio test + geometric check,
-   :meth:`scenespeak.perception.database.ObjectDatabase.label`);
+   :meth:`scenespeak.perception.recognition.ObjectDatabase.label`);
 3. the distance strategy: for each recognised object its training outline, carried into the left
    image by the fitted homography, selects a region whose depth is taken from dense stereo
    (OpenCV StereoSGBM, computed once per pair over the disparity range the keypoints need and
@@ -42,7 +42,7 @@ from __future__ import annotations
 import time
 from collections.abc import Callable, Iterator, Mapping
 from concurrent.futures import Future, ThreadPoolExecutor
-from contextlib import AbstractContextManager, contextmanager
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from os import PathLike
 from pathlib import Path
@@ -53,6 +53,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from scenespeak.errors import DatabaseError, ImageError, InputError
+from scenespeak.perception.blas import single_threaded_blas
 from scenespeak.perception.features import detect, to_gray
 from scenespeak.perception.objects import SceneObject, Skipped, build_objects, make_object
 
@@ -368,7 +369,7 @@ def describe_scene(
     rig : StereoRig
         Its calibration (``scenespeak.perception.calibration.load_rig``).
     db : ObjectDatabase
-        The object database (``scenespeak.perception.database.ObjectDatabase.open``).
+        The object database (``scenespeak.perception.recognition.ObjectDatabase.open``).
     options : PipelineOptions, optional
         The knobs; keyword ``overrides`` replace single fields (``dense=False``, ...).
     sources : mapping, optional
@@ -414,7 +415,7 @@ def describe_scene(
     # product took 16 ms instead of 0.1 ms on the shared 2-core machine), so BLAS runs
     # single-threaded throughout.
     say("sift")
-    with _single_threaded_blas(), ThreadPoolExecutor(max_workers=1) as pool:
+    with single_threaded_blas(), ThreadPoolExecutor(max_workers=1) as pool:
         t0 = time.perf_counter()
         future_r = pool.submit(detect, to_gray(right), precise_upscale=False)
         feats_l = detect(to_gray(left), precise_upscale=False)
@@ -466,13 +467,6 @@ def _stereo_stage(
             dense_margin=opts.dense_margin,
         )
     return feats_r, result
-
-
-def _single_threaded_blas() -> AbstractContextManager[object]:
-    """Limit BLAS to one thread for a ``with`` block (threadpoolctl, if installed)."""
-    from scenespeak.perception.database import _single_threaded_blas as limit
-
-    return limit()
 
 
 def _after_stereo(
@@ -698,8 +692,8 @@ def describe_files(
     a scene without texture).
     """
     from scenespeak.perception.calibration import load_rig, load_ros_rig
-    from scenespeak.perception.database import ObjectDatabase
     from scenespeak.perception.features import load_image
+    from scenespeak.perception.recognition import ObjectDatabase
 
     rig = load_rig(calib_path) if calib_right is None else load_ros_rig(calib_path, calib_right)
     left = load_image(left_path, gray=False)
@@ -727,7 +721,7 @@ def database_from_dataset(
     InputError
         If the dataset has no ``objects`` folder.
     """
-    from scenespeak.perception.database import ObjectDatabase
+    from scenespeak.perception.recognition import ObjectDatabase
 
     root = Path(dataset) / "objects"
     if not root.is_dir():

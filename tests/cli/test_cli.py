@@ -230,7 +230,7 @@ def _db_someone_elses(scene: dict[str, Path], tmp: Path) -> dict[str, Path]:
 
 
 def _db_empty(scene: dict[str, Path], tmp: Path) -> dict[str, Path]:
-    from scenespeak.perception.database import ObjectDatabase
+    from scenespeak.perception.recognition import ObjectDatabase
 
     empty = tmp / "empty.db"
     ObjectDatabase.create(empty).close()

@@ -16,7 +16,8 @@ from numpy.typing import NDArray
 from skimage import data
 
 from scenespeak.errors import DatabaseError, ImageError, ScenespeakError
-from scenespeak.perception.database import (
+from scenespeak.perception.features import Features, detect, to_gray
+from scenespeak.perception.recognition import (
     APPLICATION,
     SCHEMA_VERSION,
     Detection,
@@ -28,7 +29,6 @@ from scenespeak.perception.database import (
     build_index,
     outline_from_mask,
 )
-from scenespeak.perception.features import Features, detect, to_gray
 
 # --------------------------------------------------------------------------------------------
 # Real photos as training objects, and a scene made by warping them into another photo
@@ -671,7 +671,7 @@ def test_quantiser_is_cached_in_the_file(db_copy: Path, scene: Scene, kind: str)
 _KILL_SCRIPT = """
 import os, signal, sys
 import cv2
-from scenespeak.perception.database import ObjectDatabase
+from scenespeak.perception.recognition import ObjectDatabase
 
 def die(stage, done, total):
     if stage == "store" and done == 2:

@@ -15,8 +15,8 @@ import pytest
 from skimage import data
 
 from cardscene import photo
-from scenespeak.perception.database import ObjectDatabase
 from scenespeak.perception.features import detect
+from scenespeak.perception.recognition import ObjectDatabase
 from scenespeak.pipeline import PipelineOptions
 
 #: scikit-image photos none of the learnt objects shows (the motorcycle is the Middlebury pair)

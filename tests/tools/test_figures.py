@@ -193,7 +193,7 @@ CARDS = {"astronaut": (-0.25, 1.2, 0.2), "chelsea": (0.22, 1.0, 0.2), "coffee": 
 @pytest.fixture(scope="module")
 def description(tmp_path_factory: pytest.TempPathFactory) -> object:
     from scenespeak.perception.calibration import rig_from_short
-    from scenespeak.perception.database import ObjectDatabase
+    from scenespeak.perception.recognition import ObjectDatabase
     from scenespeak.pipeline import describe_scene
 
     left, right = card_pair(CARDS)

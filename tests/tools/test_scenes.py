@@ -353,8 +353,8 @@ def test_cylinder_turned_between_the_old_views_is_recognised_at_1_5_m(tmp_path: 
     """A mug 1.47 m away, turned 110 degrees (its side between the old views at 30 and 180
     degrees), is found by the database learnt from its eight training views, and was not with
     the four views (front, +-30, back) the generator used to render."""
-    from scenespeak.perception.database import ObjectDatabase
     from scenespeak.perception.features import detect, load_image
+    from scenespeak.perception.recognition import ObjectDatabase
     from scenespeak.tools.scenes import VIEW_YAWS, render_training_views, view_yaws
 
     by_label = {o.label: o for o in CATALOGUE}

@@ -33,7 +33,7 @@ def db_add(
     quiet: QuietOpt = False,
 ) -> None:
     """Learn an object from training images (a transaction: all or nothing)."""
-    from scenespeak.perception.database import ObjectDatabase
+    from scenespeak.perception.recognition import ObjectDatabase
 
     masks = list(mask) if mask else None
     if masks is not None and len(masks) != len(images):
@@ -52,7 +52,7 @@ def db_list(
     as_json: Annotated[bool, typer.Option("--json", help="Print JSON.")] = False,
 ) -> None:
     """List the objects in the database."""
-    from scenespeak.perception.database import ObjectDatabase
+    from scenespeak.perception.recognition import ObjectDatabase
 
     with ObjectDatabase.open(db, readonly=True) as database:
         rows = [
@@ -74,7 +74,7 @@ def db_remove(
     db: DbOpt,
 ) -> None:
     """Remove objects from the database."""
-    from scenespeak.perception.database import ObjectDatabase
+    from scenespeak.perception.recognition import ObjectDatabase
 
     with ObjectDatabase.open(db) as database:
         for lab in labels:

@@ -1,0 +1,522 @@
+"""The inverted-file index (k-means coarse quantiser over ``uint8`` lists) in NumPy/BLAS, and
+the same cells searched by FAISS when ``faiss-cpu`` is installed."""
+
+from __future__ import annotations
+
+import itertools
+from collections.abc import Callable, Iterator
+from concurrent.futures import ThreadPoolExecutor
+from typing import Any, Self
+
+import numpy as np
+from numpy.typing import NDArray
+
+from scenespeak.perception.blas import single_threaded_blas
+from scenespeak.perception.recognition.index import (
+    _DIM,
+    _default_nlist,
+    _runs,
+    _sqnorms,
+    _topk_rows,
+)
+
+__all__ = ["FaissIndex", "IVFIndex"]
+
+
+def _kmeans(
+    data: NDArray[np.uint8], k: int, *, iters: int, rng: np.random.Generator
+) -> NDArray[np.float32]:
+    """Lloyd's k-means on a sample (float32 GEMM); empty clusters are re-seeded."""
+    x = data.astype(np.float32)
+    c = x[rng.choice(x.shape[0], size=k, replace=False)].copy()
+    for _ in range(iters):
+        assign = _nearest_centroid(x, c)
+        counts = np.bincount(assign, minlength=k).astype(np.float32)
+        sums = np.zeros_like(c)
+        np.add.at(sums, assign, x)
+        empty = counts == 0
+        c[~empty] = sums[~empty] / counts[~empty, None]
+        if empty.any():
+            c[empty] = x[rng.choice(x.shape[0], size=int(empty.sum()), replace=False)]
+    return c
+
+
+def _nearest_centroid(
+    x: NDArray[np.float32],
+    c: NDArray[np.float32],
+    chunk: int = 2048,
+) -> NDArray[np.intp]:
+    cn = np.einsum("ij,ij->i", c, c)
+    out = np.empty(x.shape[0], np.intp)
+    for s in range(0, x.shape[0], chunk):
+        d = x[s : s + chunk] @ c.T
+        d *= -2.0
+        d += cn[None, :]
+        out[s : s + chunk] = np.argmin(d, axis=1)
+    return out
+
+
+def _batches(
+    chunks: Callable[[], Iterator[NDArray[np.uint8]]], rows: int = 16384
+) -> Iterator[NDArray[np.uint8]]:
+    """The chunks regrouped into blocks of about ``rows`` rows (for efficient GEMMs)."""
+    pending: list[NDArray[np.uint8]] = []
+    count = 0
+    for block in itertools.chain(chunks(), [None]):
+        if block is not None:
+            pending.append(block)
+            count += block.shape[0]
+        if count and (count >= rows or block is None):
+            yield np.concatenate(pending)
+            pending, count = [], 0
+
+
+def _quantise(
+    chunks: Callable[[], Iterator[NDArray[np.uint8]]],
+    n: int,
+    *,
+    nlist: int | None,
+    train_size: int,
+    iters: int,
+    seed: int,
+    centroids: NDArray[np.float32] | None,
+    cells: NDArray[np.integer] | None,
+) -> tuple[NDArray[np.float32], NDArray[np.intp]]:
+    """Coarse quantiser (trained on a sample unless given) and each descriptor's cell."""
+    if centroids is None:
+        cells = None
+        if nlist is None:
+            nlist = _default_nlist(n)
+        nlist = max(1, min(nlist, n))
+        rng = np.random.default_rng(seed)
+        pick = np.sort(rng.choice(n, size=min(n, train_size), replace=False))
+        sample = np.empty((pick.size, _DIM), np.uint8)
+        start = 0
+        for block in chunks():
+            a, b = np.searchsorted(pick, [start, start + block.shape[0]])
+            sample[a:b] = block[pick[a:b] - start]
+            start += block.shape[0]
+        centroids = _kmeans(sample, nlist, iters=iters, rng=rng)
+        del sample
+    centroids = np.ascontiguousarray(centroids, np.float32)
+    if cells is not None and len(cells) == n:
+        return centroids, np.asarray(cells, np.intp)
+    assign = np.empty(n, np.intp)
+    start = 0
+    for block in _batches(chunks):
+        assign[start : start + block.shape[0]] = _nearest_centroid(
+            block.astype(np.float32), centroids
+        )
+        start += block.shape[0]
+    return centroids, assign
+
+
+class _IndexBuilder:
+    """Construction shared by the inverted-file indexes: from one array or from chunks.
+
+    Subclasses implement ``_build(chunks, n, **options)``; the options are the keyword
+    parameters documented on each subclass.
+    """
+
+    def __init__(self, descriptors: NDArray[np.uint8], **options: Any) -> None:
+        data = np.ascontiguousarray(descriptors, dtype=np.uint8)
+        self._build(lambda: iter([data]), data.shape[0], **options)
+
+    centroids: NDArray[np.float32]
+    nprobe: int
+
+    def _build(
+        self,
+        chunks: Callable[[], Iterator[NDArray[np.uint8]]],
+        n: int,
+        *,
+        nlist: int | None = None,
+        nprobe: int = 4,
+        train_size: int = 65536,
+        iters: int = 10,
+        seed: int = 0,
+        centroids: NDArray[np.float32] | None = None,
+        cells: NDArray[np.integer] | None = None,
+        **extra: Any,
+    ) -> None:
+        self.centroids, assign = _quantise(
+            chunks,
+            n,
+            nlist=nlist,
+            train_size=train_size,
+            iters=iters,
+            seed=seed,
+            centroids=centroids,
+            cells=cells,
+        )
+        self.nprobe = nprobe
+        self._fill(chunks, n, assign, **extra)
+
+    def _fill(
+        self,
+        chunks: Callable[[], Iterator[NDArray[np.uint8]]],
+        n: int,
+        assign: NDArray[np.intp],
+        **extra: Any,
+    ) -> None:
+        """Store the descriptors under their coarse cells ``assign`` (subclass-specific)."""
+        raise NotImplementedError
+
+    @property
+    def nlist(self) -> int:
+        return int(self.centroids.shape[0])
+
+    @classmethod
+    def from_chunks(
+        cls,
+        chunks: Callable[[], Iterator[NDArray[np.uint8]]],
+        total: int,
+        **options: Any,
+    ) -> Self:
+        """Build from descriptors read in consecutive chunks, without holding two copies.
+
+        ``chunks()`` must yield the same ``(n_i, 128)`` blocks, in the same order, each time it
+        is called; it is called up to three times (training sample, cell assignment, filling
+        the lists), so that the peak memory is one ``uint8`` copy plus a training sample.
+        ``options`` are those of the constructor.
+        """
+        index = cls.__new__(cls)
+        index._build(chunks, total, **options)
+        return index
+
+
+class IVFIndex(_IndexBuilder):
+    """Inverted-file index in NumPy: k-means coarse quantiser, ``uint8`` lists, float32 GEMM.
+
+    The descriptors are stored once, grouped by coarse cell (``uint8``, 128 B each). A query
+    visits its ``nprobe`` nearest cells; each visited cell's block is converted to float32 and
+    multiplied with all queries that visit it in one GEMM.
+
+    Parameters
+    ----------
+    descriptors : (N, 128) uint8
+    nlist : int, optional
+        Number of coarse cells (default about ``2 * sqrt(N)``, a power of two).
+    nprobe : int
+        Cells visited per query.
+    train_size : int
+        Descriptors sampled to train the quantiser.
+    seed : int
+        Seed of the sample and of the k-means initialisation.
+    centroids : (nlist, 128) float32, optional
+        A quantiser trained before (skips the training).
+    cells : (N,) int, optional
+        The cell of each descriptor under ``centroids`` (skips the assignment).
+    threads : int, optional
+        Threads scanning the cells in a search (default 1; 2 can help on an idle 2-core
+        machine, and did not on the shared one it was measured on).
+    """
+
+    def _fill(
+        self,
+        chunks: Callable[[], Iterator[NDArray[np.uint8]]],
+        n: int,
+        assign: NDArray[np.intp],
+        threads: int | None = None,
+    ) -> None:
+        self.threads = 1 if threads is None else threads
+        order = np.argsort(assign, kind="stable")
+        counts = np.bincount(assign, minlength=self.centroids.shape[0])
+        self._offsets = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
+        self._ids = order.astype(np.int32)
+        position = np.empty(n, np.intp)
+        position[order] = np.arange(n)
+        data = np.empty((n, _DIM), np.uint8)
+        start = 0
+        for block in chunks():
+            data[position[start : start + block.shape[0]]] = block
+            start += block.shape[0]
+        self._data = data
+        self._norms = _sqnorms(self._data)
+
+    def cells(self) -> NDArray[np.uint16 | np.int32]:
+        """The coarse cell of every descriptor, in the order they were given (for caching)."""
+        counts = np.diff(self._offsets)
+        cell_sorted = np.repeat(np.arange(self.nlist), counts)
+        out = np.empty(self.ntotal, np.uint16 if self.nlist <= 65535 else np.int32)
+        out[self._ids] = cell_sorted
+        return out
+
+    @property
+    def ntotal(self) -> int:
+        return int(self._data.shape[0])
+
+    @property
+    def nbytes(self) -> int:
+        return int(
+            self._data.nbytes
+            + self._ids.nbytes
+            + self._norms.nbytes
+            + self._offsets.nbytes
+            + self.centroids.nbytes
+        )
+
+    #: Largest table of candidate distances, in float32 entries (``(query, probe)`` pairs ×
+    #: largest visited cell), filled cell by cell and read once at the end; above it each
+    #: cell's nearest are read out as the cell is visited.
+    table_limit = 1 << 21
+
+    def search(
+        self, query: NDArray[np.uint8], k: int
+    ) -> tuple[NDArray[np.float32], NDArray[np.int64]]:
+        # The GEMMs here are small (a few queries × one cell): BLAS threads only add
+        # synchronisation, and on a busy machine spinning BLAS threads cost seconds (measured:
+        # 2.9 s instead of 0.13 s with two OpenBLAS threads and another process on one of the
+        # two cores). So BLAS runs single-threaded during the search (threadpoolctl, a declared
+        # dependency, restores the setting afterwards).
+        with single_threaded_blas():
+            return self._search(query, k)
+
+    def _search(
+        self, query: NDArray[np.uint8], k: int
+    ) -> tuple[NDArray[np.float32], NDArray[np.int64]]:
+        q = np.ascontiguousarray(query, np.float32)
+        nq = q.shape[0]
+        nprobe = min(self.nprobe, self.nlist)
+        if nq == 0:
+            return np.full((0, k), np.inf, np.float32), np.full((0, k), -1, np.int64)
+        qn = np.einsum("ij,ij->i", q, q)
+        qm2 = q * np.float32(-2.0)
+        cd = qm2 @ self.centroids.T
+        cd += np.einsum("ij,ij->i", self.centroids, self.centroids)[None, :]
+        if nprobe >= self.nlist:
+            probes = np.tile(np.arange(self.nlist), (nq, 1))
+        elif nprobe <= 8:
+            # A few rounds of argmin (SIMD) beat argpartition over nlist columns (~6x here).
+            probes = np.empty((nq, nprobe), np.intp)
+            rows = np.arange(nq)
+            for j in range(nprobe):
+                probes[:, j] = np.argmin(cd, axis=1)
+                cd[rows, probes[:, j]] = np.inf
+        else:
+            probes = np.argpartition(cd, nprobe - 1, axis=1)[:, :nprobe]
+        out_d, out_i = self._scan_cells(qm2, probes, k)
+        out_d += qn[:, None]
+        np.maximum(out_d, 0.0, out=out_d)
+        return out_d, out_i
+
+    def _scan_cells(
+        self, qm2: NDArray[np.float32], probes: NDArray[np.intp], k: int
+    ) -> tuple[NDArray[np.float32], NDArray[np.int64]]:
+        """Each probed cell's ``k`` nearest per query, merged into each query's ``k`` nearest.
+
+        Returns ``-2 q·b + |b|²`` (without ``|q|²``, ``inf`` where missing) and the ids
+        (``-1`` where missing), nearest first.
+        """
+        nq, nprobe = probes.shape
+        # Candidates per (query, probe) pair, in the order the pairs are visited (grouped by
+        # cell), so that each cell writes one contiguous block of rows. For the small table,
+        # cells of the same size come next to each other (for _scan_table's partitions); the
+        # pairs of one cell stay in query order either way.
+        flat = probes.ravel()
+        size_of = np.diff(self._offsets)[flat]
+        width = int(size_of.max())
+        table = flat.size * (width + 1) <= self.table_limit
+        order = np.argsort(size_of * self.nlist + flat if table else flat, kind="stable")
+        lists = flat[order]
+        qidx = order // nprobe
+        bounds = np.flatnonzero(np.diff(lists)) + 1
+        starts = np.concatenate([[0], bounds])
+        ends = np.concatenate([bounds, [lists.size]])
+        cells = lists[starts]
+        # (first pair, end pair, first member, end member) of each visited cell
+        work = list(
+            zip(
+                starts.tolist(),
+                ends.tolist(),
+                self._offsets[cells].tolist(),
+                self._offsets[cells + 1].tolist(),
+                strict=True,
+            )
+        )
+        if table:
+            # The queries in visiting order, with a column of ones: against a cell's block
+            # with its squared norms as a 129th column, one GEMM gives ``-2 q·b + |b|²``.
+            qa = np.empty((flat.size, _DIM + 1), np.float32)
+            qa[:, :_DIM] = qm2[qidx]
+            qa[:, _DIM] = 1.0
+            # Most cells visited (a large batch of queries): convert them all in one go.
+            visited = int(np.diff(self._offsets)[cells].sum())
+            whole = 2 * visited >= self.ntotal and self.ntotal * (_DIM + 1) <= self.table_limit
+            pair_d, pair_i = self._scan_table(qa, lists, work, width, k, whole=whole)
+        else:
+            pair_d, pair_i = self._scan_each(qm2, qidx, work, k)
+        back = np.empty_like(order)
+        back[order] = np.arange(order.size)
+        cand_d = pair_d[back].reshape(nq, nprobe * k)
+        cand_i = pair_i[back].reshape(nq, nprobe * k)
+        sel = _topk_rows(cand_d, k)
+        return np.take_along_axis(cand_d, sel, axis=1), np.take_along_axis(cand_i, sel, axis=1)
+
+    def _run(
+        self,
+        scan: Callable[[list[tuple[int, int, int, int]]], None],
+        work: list[tuple[int, int, int, int]],
+    ) -> None:
+        """Run ``scan`` over the cells, split over :attr:`threads` threads if set."""
+        # NumPy releases the GIL in the GEMM, the cast and the partition: cells are split
+        # over threads (each writes its own rows of the outputs).
+        threads = max(1, min(self.threads, len(work) // 16))
+        if threads == 1:
+            scan(work)
+        else:
+            with ThreadPoolExecutor(threads) as pool:
+                list(pool.map(scan, [work[t::threads] for t in range(threads)]))
+
+    def _scan_table(
+        self,
+        qa: NDArray[np.float32],
+        lists: NDArray[np.intp],
+        work: list[tuple[int, int, int, int]],
+        width: int,
+        k: int,
+        *,
+        whole: bool = False,
+    ) -> tuple[NDArray[np.float32], NDArray[np.int64]]:
+        """:meth:`_scan_each` with fewer steps per cell, for searches of small tables.
+
+        Each cell's distances go straight from the GEMM into one table (the squared norms come
+        out of the GEMM too, as a 129th column against a query column of ones); the partitions
+        run once per run of cells of the same size (``work`` comes ordered by size), and the
+        nearest are read out of the table for all cells at once. The numbers are the same as
+        :meth:`_scan_each`'s: squared distances between ``uint8`` vectors, and every partial
+        sum of them, are integers below 2**24, exact in float32 whatever the order of the
+        sums. Each row is partitioned on its own, and is the same row as there, so the same
+        columns come out in the same order (ties included). With ``whole``, all the descriptors are
+        converted to float32 at once (a temporary copy) rather than cell by cell.
+        """
+        npairs = qa.shape[0]
+        table = np.empty((npairs, width + 1), np.float32)
+        table[:, width] = np.inf  # where missing neighbours point
+        cols = np.full((npairs, k), width, np.intp)
+        data, norms = self._data, self._norms
+        converted = None
+        if whole:
+            converted = np.empty((self.ntotal, _DIM + 1), np.float32)
+            converted[:, :_DIM] = data
+            converted[:, _DIM] = norms
+
+        def scan(items: list[tuple[int, int, int, int]]) -> None:
+            buffer = np.empty((0 if whole else width, _DIM + 1), np.float32)  # one cell
+            for a, b, lo, hi in items:
+                n = hi - lo
+                if n == 0:
+                    continue
+                if converted is not None:
+                    block = converted[lo:hi]
+                else:
+                    block = buffer[:n]
+                    block[:, :_DIM] = data[lo:hi]
+                    block[:, _DIM] = norms[lo:hi]
+                np.matmul(qa[a:b], block.T, out=table[a:b, :n])
+
+        self._run(scan, work)
+        # The partitions, one per run of cells of the same size (rows of equal length: each
+        # row is partitioned on its own, as it would be alone).
+        sizes = [hi - lo for _, _, lo, hi in work]
+        for i, j in zip(*_runs(sizes), strict=True):
+            a, b, n = work[i][0], work[j - 1][1], sizes[i]
+            if k < n:
+                cols[a:b] = np.argpartition(table[a:b, :n], k - 1, axis=1)[:, :k]
+            else:
+                cols[a:b, :n] = np.arange(n)
+        pair_d = table.ravel()[cols + (np.arange(npairs) * (width + 1))[:, None]]
+        ids = np.append(self._ids.astype(np.int64), -1)  # -1 at ntotal: missing
+        where = np.where(cols == width, self.ntotal, self._offsets[lists][:, None] + cols)
+        return pair_d, ids[where]
+
+    def _scan_each(
+        self,
+        qm2: NDArray[np.float32],
+        qidx: NDArray[np.intp],
+        work: list[tuple[int, int, int, int]],
+        k: int,
+    ) -> tuple[NDArray[np.float32], NDArray[np.int64]]:
+        """Each probed cell's ``k`` nearest for the queries visiting it, cell by cell.
+
+        Used for large searches (where the GEMMs and partitions dominate, not the steps).
+        """
+        pair_d = np.full((qidx.size, k), np.inf, np.float32)
+        pair_i = np.full((qidx.size, k), -1, np.int64)
+
+        def scan(items: list[tuple[int, int, int, int]]) -> None:
+            for a, b, lo, hi in items:
+                if hi == lo:
+                    continue
+                d = qm2[qidx[a:b]] @ self._data[lo:hi].astype(np.float32).T
+                d += self._norms[lo:hi][None, :]
+                kk = min(k, hi - lo)
+                if kk < hi - lo:
+                    cols = np.argpartition(d, kk - 1, axis=1)[:, :kk]
+                    pair_d[a:b, :kk] = d[np.arange(b - a)[:, None], cols]
+                else:
+                    cols = np.broadcast_to(np.arange(hi - lo), d.shape)
+                    pair_d[a:b, :kk] = d
+                pair_i[a:b, :kk] = self._ids[lo + cols]
+
+        self._run(scan, work)
+        return pair_d, pair_i
+
+
+class FaissIndex(_IndexBuilder):
+    """FAISS ``IndexIVFScalarQuantizer`` with ``QT_8bit_direct``: exact ``uint8`` storage.
+
+    Only available when the optional ``faiss-cpu`` package is installed. Uses the same coarse
+    quantiser as :class:`IVFIndex` (so the cache in the database file serves both); the
+    descriptors are stored as 128-byte codes (no residuals), searched by FAISS in C++.
+    """
+
+    def _fill(
+        self,
+        chunks: Callable[[], Iterator[NDArray[np.uint8]]],
+        n: int,
+        assign: NDArray[np.intp],
+    ) -> None:
+        import faiss  # optional dependency
+
+        nl = self.centroids.shape[0]
+        quantizer = faiss.IndexFlatL2(_DIM)
+        quantizer.add(self.centroids)
+        index = faiss.IndexIVFScalarQuantizer(
+            quantizer, _DIM, nl, faiss.ScalarQuantizer.QT_8bit_direct, faiss.METRIC_L2
+        )
+        # Encode the descriptors themselves, not residuals: QT_8bit_direct stores 0..255 as is.
+        index.by_residual = False
+        index.train(np.zeros((1, _DIM), np.float32))  # 8-bit direct: nothing to learn
+        start = 0
+        for block in _batches(chunks, 65536):
+            x = np.ascontiguousarray(block, np.float32)
+            pre = np.ascontiguousarray(assign[start : start + x.shape[0]], np.int64)
+            index.add_core(x.shape[0], faiss.swig_ptr(x), None, faiss.swig_ptr(pre))
+            start += x.shape[0]
+        self._cells = assign.astype(np.uint16 if nl <= 65535 else np.int32)
+        self._index = index
+        self._quantizer = quantizer
+        self._n = n
+
+    def cells(self) -> NDArray[np.uint16 | np.int32]:
+        """The coarse cell of every descriptor, in the order they were given (for caching)."""
+        return self._cells
+
+    @property
+    def ntotal(self) -> int:
+        return self._n
+
+    @property
+    def nbytes(self) -> int:
+        # codes (128 B) + ids (8 B) per descriptor, the coarse centroids, the cell cache.
+        return int(self._n * (_DIM + 8) + self.centroids.nbytes + self._cells.nbytes)
+
+    def search(
+        self, query: NDArray[np.uint8], k: int
+    ) -> tuple[NDArray[np.float32], NDArray[np.int64]]:
+        q = np.ascontiguousarray(query, np.float32)
+        self._index.nprobe = self.nprobe
+        d, i = self._index.search(q, k)
+        d = np.where(i < 0, np.inf, d).astype(np.float32)
+        return d, i.astype(np.int64)

@@ -1,0 +1,164 @@
+"""Labelling: the scene's keypoints → recognised objects (ratio test, then geometric checks).
+
+Lowe's recipe: a ratio test whose second neighbour is the nearest descriptor *of a different
+object*, then per training view a RANSAC homography (a similarity where there are few
+matches), each inlier's SIFT scale and orientation checked against the model
+(:mod:`~scenespeak.perception.recognition.verify`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from scenespeak.perception.features import Features
+from scenespeak.perception.recognition.index import DescriptorIndex
+from scenespeak.perception.recognition.options import LabelOptions
+from scenespeak.perception.recognition.results import Detection, Labelling
+from scenespeak.perception.recognition.verify import _apply_h, _fit_view, _Keys, _small_enough
+
+__all__ = ["label_features"]
+
+
+@dataclass(frozen=True)
+class _Loaded:
+    """Everything :meth:`ObjectDatabase.label` needs, loaded once."""
+
+    generation: int
+    index: DescriptorIndex
+    object_of: NDArray[np.int32]  # per descriptor: object id
+    view_of: NDArray[np.int32]  # per descriptor: view id
+    xy: NDArray[np.float32]  # (N, 2)
+    size: NDArray[np.float32]
+    angle: NDArray[np.float32]
+    labels: dict[int, str]
+    outlines: dict[int, NDArray[np.float32]]
+
+
+@dataclass(frozen=True)
+class _Candidates:
+    """The correspondences that passed the ratio test: query ``q_idx[i]`` ↔ training
+    descriptor ``t_idx[i]`` in view ``view[i]``; ``first_obj`` is each query's object."""
+
+    q_idx: NDArray[np.intp]
+    t_idx: NDArray[np.int64]
+    view: NDArray[np.int32]
+    first_obj: NDArray[np.int32]
+    passed: NDArray[np.bool_]
+
+
+def _ratio_candidates(db: _Loaded, features: Features, o: LabelOptions) -> _Candidates:
+    """The ratio test against the nearest descriptor of another object, and the candidates.
+
+    For a query that passed, every fetched neighbour of the same object that passes the ratio
+    test too (its copies in the object's other views: the same surface point seen from another
+    side or distance), the nearest per view. Each training view is then checked with all the
+    queries that match into it, not only those whose single nearest neighbour lies in it.
+    """
+    nq = len(features)
+    kk = max(2, min(o.k, db.index.ntotal))
+    dist, ids = db.index.search(features.descriptors, kk)
+    valid = ids[:, 0] >= 0
+    first_obj = np.where(valid, db.object_of[np.maximum(ids[:, 0], 0)], -1)
+    obj = np.where(ids >= 0, db.object_of[np.maximum(ids, 0)], -1)
+    other = (obj != first_obj[:, None]) & (ids >= 0)
+    has_other = other.any(axis=1)
+    j2 = np.argmax(other, axis=1)
+    d2 = np.where(has_other, dist[np.arange(nq), j2], dist[:, -1])
+    limit = (o.ratio * o.ratio) * d2
+    passed = valid & (dist[:, 0] < limit)
+    cand = passed[:, None] & (obj == first_obj[:, None]) & (ids >= 0) & (dist < limit[:, None])
+    rows, cols = np.nonzero(cand)  # row-major: nearest first within each query
+    t_all = ids[rows, cols]
+    v_all = db.view_of[t_all].astype(np.int64)
+    key = rows.astype(np.int64) * (int(db.view_of.max()) + 1) + v_all
+    _, first = np.unique(key, return_index=True)
+    q_idx = rows[first].astype(np.intp)
+    t_idx = t_all[first]
+    return _Candidates(q_idx, t_idx, db.view_of[t_idx], first_obj, passed)
+
+
+def _detect_in_view(
+    db: _Loaded,
+    features: Features,
+    qi: NDArray[np.intp],
+    ti: NDArray[np.int64],
+    ids: tuple[int, int],
+    o: LabelOptions,
+    floor: int,
+) -> Detection | None:
+    """The detection of object ``ids[0]`` in training view ``ids[1]`` from the matches
+    ``qi`` ↔ ``ti``, if it has more than ``floor`` inliers and passes the small-object rule."""
+    oid, vid = ids
+    outline = db.outlines[vid]
+    train = _Keys(db.xy[ti].astype(np.float64), db.size[ti], db.angle[ti])
+    query = _Keys(features.xy[qi], features.size[qi], features.angle[qi])
+    fit = _fit_view(train, query, outline, o)
+    if fit is None:
+        return None
+    n_in = int(fit.inliers.sum())
+    if n_in <= floor:
+        return None
+    in_scene = _apply_h(fit.h, outline.astype(np.float64))
+    if n_in < o.min_inliers and not _small_enough(
+        in_scene, features.xy[qi[fit.inliers]], o.small_area, o.min_inliers_small
+    ):
+        return None
+    return Detection(
+        label=db.labels[oid],
+        view_id=int(vid),
+        homography=fit.h,
+        inliers=np.sort(qi[fit.inliers]).astype(np.intp),
+        outline_in_scene=in_scene,
+        score=float(n_in),
+        model=fit.model,
+        matches=len(qi),
+    )
+
+
+def _detect_object(
+    db: _Loaded, features: Features, c: _Candidates, oid: int, need: int, o: LabelOptions
+) -> Detection | None:
+    """The best view's detection of one object (most inliers), or None."""
+    sel_o = c.first_obj[c.q_idx] == oid
+    vids, counts = np.unique(c.view[sel_o], return_counts=True)
+    if counts.max() < need:
+        return None
+    best: Detection | None = None
+    order = np.argsort(-counts, kind="stable")[: o.max_views]
+    for vid, count in zip(vids[order].tolist(), counts[order].tolist(), strict=True):
+        # A view needs ``need`` inliers, and strictly more than the best view so far.
+        floor = need - 1 if best is None else int(best.score)
+        # Views come most matched first, and a view's inliers are a subset of its matches:
+        # once a view has no more matches than ``floor``, no view that follows can win.
+        if count <= floor:
+            break
+        sel = sel_o & (c.view == vid)
+        det = _detect_in_view(db, features, c.q_idx[sel], c.t_idx[sel], (oid, vid), o, floor)
+        if det is not None:
+            best = det
+    return best
+
+
+def label_features(db: _Loaded, features: Features, o: LabelOptions) -> Labelling:
+    """Label query keypoints with the loaded database's objects (:meth:`ObjectDatabase.label`)."""
+    need = min(o.min_inliers, o.min_inliers_small) if o.small_area > 0 else o.min_inliers
+    nq = len(features)
+    labels = np.full(nq, -1, np.int32)
+    matched = np.full(nq, -1, np.int32)
+    if nq == 0:
+        return Labelling(labels, (), matched)
+    c = _ratio_candidates(db, features, o)
+    matched[c.passed] = c.first_obj[c.passed]
+    found = []
+    for oid in np.unique(c.first_obj[c.q_idx]).tolist():
+        det = _detect_object(db, features, c, oid, need, o)
+        if det is not None:
+            found.append(det)
+    found.sort(key=lambda d: -d.score)
+    detections = tuple(found)
+    for i, det in enumerate(detections):
+        labels[det.inliers] = i
+    return Labelling(labels, detections, matched)

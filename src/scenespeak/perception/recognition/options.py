@@ -1,0 +1,84 @@
+"""The labelling stage's options: ratio test, RANSAC verification and the small-object rule."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, fields, replace
+
+from scenespeak.errors import InputError
+
+__all__ = ["LabelOptions"]
+
+
+@dataclass(frozen=True)
+class LabelOptions:
+    """Knobs of :meth:`ObjectDatabase.label` (the pipeline's defaults).
+
+    Attributes
+    ----------
+    ratio : float
+        0.8 — Lowe's ratio test: nearest distance < ``ratio`` × distance to the nearest
+        descriptor of a *different* object. Among the ``k`` nearest neighbours; if all ``k``
+        are of the same object, the ``k``-th distance stands in (a lower bound, so the test is
+        only stricter). Lowe (IJCV 2004) recommends 0.8; 0.85 and 0.9 were measured and not
+        better (``docs/database.md``).
+    min_inliers : int
+        8 — geometric inliers needed to accept an object (a few stray matches never make one).
+    ransac_threshold : float
+        4.0 — reprojection tolerance in scene pixels.
+    k : int
+        16 — neighbours fetched per query descriptor.
+    homography_min : int
+        12 — matches needed to try a homography; a similarity is also tried from 2 matches.
+    max_scale_ratio, max_angle_deg : float
+        2.0, 30° — each inlier's SIFT scale and orientation must agree with the model this
+        closely.
+    max_views : int
+        3 — training views per object tried, most matched first. A query that passed the
+        ratio test is a candidate in every view of its object where one of its ``k``
+        neighbours lies and passes the ratio test too (the nearest such one per view), so
+        matches split between near-identical views are pooled.
+    nprobe : int
+        4 — inverted-file cells visited per query descriptor (large databases only).
+    min_inliers_small : int
+        4 — inliers at distinct positions enough to accept a *small* detection (its outline
+        in the scene covers at most ``small_area``): far objects carry few keypoints.
+    small_area : float
+        8,000 px² — largest outline area for the small-detection rule (0: off). 4 under 8,000
+        px² was measured on the 100-scene evaluation (366/393 objects, no false objects in
+        clutter; ``docs/database.md``).
+    """
+
+    ratio: float = 0.8
+    min_inliers: int = 8
+    ransac_threshold: float = 4.0
+    k: int = 16
+    homography_min: int = 12
+    max_scale_ratio: float = 2.0
+    max_angle_deg: float = 30.0
+    max_views: int = 3
+    nprobe: int = 4
+    min_inliers_small: int = 4
+    small_area: float = 8000.0
+
+    @classmethod
+    def with_overrides(
+        cls, options: LabelOptions | None, overrides: Mapping[str, float]
+    ) -> LabelOptions:
+        """``options`` (or the defaults) with single fields replaced.
+
+        Examples
+        --------
+        >>> LabelOptions.with_overrides(None, {"min_inliers": 5}).min_inliers
+        5
+        """
+        base = options if options is not None else cls()
+        if not overrides:
+            return base
+        names = {f.name for f in fields(cls)}
+        unknown = sorted(set(overrides) - names)
+        if unknown:
+            raise InputError(
+                "label options", f"unknown {', '.join(unknown)}; the fields are {sorted(names)}"
+            )
+        return replace(base, **overrides)  # type: ignore[arg-type]

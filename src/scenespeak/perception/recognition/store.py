@@ -1,0 +1,606 @@
+"""The object database: a SQLite file of labelled SIFT descriptors (one transaction per write)."""
+
+from __future__ import annotations
+
+import contextlib
+import sqlite3
+from collections.abc import Callable, Iterator, Sequence
+from os import PathLike
+from pathlib import Path
+from types import TracebackType
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from scenespeak.errors import DatabaseError
+from scenespeak.perception.features import Features
+from scenespeak.perception.recognition.index import (
+    _DIM,
+    DescriptorIndex,
+    IndexKind,
+    _auto_kind,
+    _have_faiss,
+    build_index,
+)
+from scenespeak.perception.recognition.ivf import FaissIndex, IVFIndex
+from scenespeak.perception.recognition.label import LabelOptions, _Loaded, label_features
+from scenespeak.perception.recognition.results import Labelling, ObjectInfo, TrainingView
+from scenespeak.perception.recognition.schema import (
+    _SCHEMA,
+    _SQLITE_MAGIC,
+    APPLICATION,
+    APPLICATION_ID,
+    SCHEMA_VERSION,
+    _check_schema,
+    _duplicate,
+    _now,
+    cached_quantiser,
+    save_quantiser,
+)
+from scenespeak.perception.recognition.views import ImageLike, MaskLike, _extract_view, _ViewData
+
+__all__ = ["ObjectDatabase"]
+
+
+Progress = Callable[[str, int, int], None]
+
+
+# --------------------------------------------------------------------------------------------
+# The database
+# --------------------------------------------------------------------------------------------
+
+
+class ObjectDatabase:
+    """A SQLite file of labelled SIFT descriptors learnt from training images.
+
+    Open with :meth:`open` (or :meth:`create`); use as a context manager, which closes the
+    file. Do not call the constructor directly.
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> from skimage import data
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "objects.db"
+    >>> with ObjectDatabase.create(path) as db:
+    ...     _ = db.add_object("cat", [data.chelsea()])
+    ...     db.labels()
+    ['cat']
+    >>> with ObjectDatabase.open(path) as db:
+    ...     [(o.label, o.views) for o in db.list_objects()]
+    [('cat', 1)]
+    """
+
+    def __init__(
+        self, path: Path, conn: sqlite3.Connection, *, readonly: bool, index_kind: IndexKind
+    ) -> None:
+        self.path = path
+        self._conn: sqlite3.Connection | None = conn
+        self.readonly = readonly
+        self.index_kind: IndexKind = index_kind
+        self._loaded: _Loaded | None = None
+
+    # -- opening -------------------------------------------------------------------------
+
+    @classmethod
+    def create(cls, path: str | PathLike[str], *, index: IndexKind = "auto") -> ObjectDatabase:
+        """Create a new, empty database file.
+
+        Raises
+        ------
+        DatabaseError
+            If the file already exists or cannot be written.
+        """
+        p = Path(path)
+        if p.exists():
+            raise DatabaseError(p, "already exists; open it instead, or choose another name")
+        if not p.parent.exists():
+            raise DatabaseError(p, f"the folder {str(p.parent)!r} does not exist")
+        try:
+            conn = sqlite3.connect(p, isolation_level=None)
+            conn.execute("BEGIN IMMEDIATE")
+            for stmt in _SCHEMA.strip().split(";"):
+                if stmt.strip():
+                    conn.execute(stmt)
+            now = _now()
+            conn.executemany(
+                "INSERT INTO meta(key, value) VALUES (?, ?)",
+                [
+                    ("application", APPLICATION),
+                    ("schema_version", str(SCHEMA_VERSION)),
+                    ("descriptor", "sift-128-uint8 (OpenCV)"),
+                    ("created", now),
+                    ("generation", "0"),
+                ],
+            )
+            conn.execute("COMMIT")
+            conn.execute(f"PRAGMA application_id = {APPLICATION_ID}")
+        except sqlite3.Error as exc:
+            raise DatabaseError(p, f"cannot create the database: {exc}") from None
+        return cls(p, conn, readonly=False, index_kind=index)
+
+    @classmethod
+    def open(
+        cls,
+        path: str | PathLike[str],
+        *,
+        create: bool = False,
+        readonly: bool = False,
+        index: IndexKind = "auto",
+    ) -> ObjectDatabase:
+        """Open a database file (or create it, if ``create`` and it does not exist).
+
+        Parameters
+        ----------
+        path : str or path-like
+        create : bool
+            Create the file when it is missing.
+        readonly : bool
+            Open read-only (writes raise :class:`DatabaseError`).
+        index : {"auto", "exact", "ivf", "faiss"}
+            Nearest-neighbour index built on the first :meth:`label` (see :func:`build_index`).
+
+        Raises
+        ------
+        DatabaseError
+            Missing file, a folder, an empty file, a file that is not SQLite, an SQLite file
+            that is not ours, another schema version, or a corrupt file.
+        """
+        p = Path(path)
+        if not p.exists():
+            if create and not readonly:
+                return cls.create(p, index=index)
+            raise DatabaseError(
+                p, "no such file; create it with `scenespeak db add --db FILE --label NAME IMAGE`"
+            )
+        if p.is_dir():
+            raise DatabaseError(p, "is a folder, not a scenespeak object database file")
+        try:
+            with p.open("rb") as fh:
+                head = fh.read(len(_SQLITE_MAGIC))
+        except OSError as exc:
+            raise DatabaseError(p, f"cannot be read: {exc.strerror or exc}") from None
+        if len(head) == 0:
+            raise DatabaseError(
+                p,
+                "the file is empty (0 bytes): it is not a scenespeak object database; "
+                "delete it or choose another name",
+            )
+        if head != _SQLITE_MAGIC:
+            raise DatabaseError(p, "is not a scenespeak object database (not an SQLite file)")
+        try:
+            if readonly:
+                conn = sqlite3.connect(
+                    f"{p.resolve().as_uri()}?mode=ro", uri=True, isolation_level=None
+                )
+            else:
+                conn = sqlite3.connect(p, isolation_level=None)
+        except sqlite3.Error as exc:
+            raise DatabaseError(p, f"cannot be opened: {exc}") from None
+        try:
+            _check_schema(p, conn)
+        except BaseException:
+            conn.close()
+            raise
+        return cls(p, conn, readonly=readonly, index_kind=index)
+
+    def close(self) -> None:
+        """Close the file (idempotent)."""
+        if self._conn is not None:
+            self._conn.close()
+            self._conn = None
+        self._loaded = None
+
+    def __enter__(self) -> ObjectDatabase:
+        return self
+
+    def __exit__(
+        self,
+        exc_type: type[BaseException] | None,
+        exc: BaseException | None,
+        tb: TracebackType | None,
+    ) -> None:
+        self.close()
+
+    def __repr__(self) -> str:
+        return f"ObjectDatabase({str(self.path)!r})"
+
+    @property
+    def conn(self) -> sqlite3.Connection:
+        if self._conn is None:
+            raise DatabaseError(self.path, "the database is closed")
+        return self._conn
+
+    def _query(self, sql: str, args: Sequence[Any] = ()) -> list[tuple[Any, ...]]:
+        try:
+            return self.conn.execute(sql, args).fetchall()
+        except sqlite3.DatabaseError as exc:
+            raise DatabaseError(self.path, f"cannot be read (corrupt?): {exc}") from None
+
+    # -- reading -------------------------------------------------------------------------
+
+    def labels(self) -> list[str]:
+        """Labels of all objects, sorted."""
+        return [r[0] for r in self._query("SELECT label FROM objects ORDER BY label")]
+
+    def __len__(self) -> int:
+        return int(self._query("SELECT COUNT(*) FROM objects")[0][0])
+
+    def __contains__(self, label: object) -> bool:
+        return bool(self._query("SELECT 1 FROM objects WHERE label = ?", (label,)))
+
+    def list_objects(self) -> list[ObjectInfo]:
+        """Every object with its number of views and descriptors and when it was added."""
+        rows = self._query(
+            "SELECT o.id, o.label, COUNT(v.id), COALESCE(SUM(v.n), 0), o.added "
+            "FROM objects o LEFT JOIN views v ON v.object_id = o.id "
+            "GROUP BY o.id ORDER BY o.label"
+        )
+        return [ObjectInfo(int(a), str(b), int(c), int(d), str(e)) for a, b, c, d, e in rows]
+
+    info = list_objects
+
+    def views(self, label: str | None = None) -> list[TrainingView]:
+        """Training views (image size and outline, no descriptors), of one object or all."""
+        sql = (
+            "SELECT v.id, o.label, v.source, v.width, v.height, v.outline, v.has_mask, v.n "
+            "FROM views v JOIN objects o ON o.id = v.object_id"
+        )
+        args: tuple[Any, ...] = ()
+        if label is not None:
+            sql += " WHERE o.label = ?"
+            args = (label,)
+        rows = self._query(sql + " ORDER BY v.id", args)
+        return [
+            TrainingView(
+                int(i),
+                str(lab),
+                str(src),
+                int(w),
+                int(h),
+                np.frombuffer(out, np.float32).reshape(-1, 2).copy(),
+                bool(hm),
+                int(n),
+            )
+            for i, lab, src, w, h, out, hm, n in rows
+        ]
+
+    def generation(self) -> int:
+        """A counter bumped by every write (for caches)."""
+        return int(self._query("SELECT value FROM meta WHERE key = 'generation'")[0][0])
+
+    # -- writing -------------------------------------------------------------------------
+
+    def add_object(
+        self,
+        label: str,
+        images: Sequence[ImageLike],
+        masks: Sequence[MaskLike] | None = None,
+        *,
+        replace: bool = False,
+        max_features: int = 0,
+        contrast_threshold: float = 0.04,
+        progress: Progress | None = None,
+    ) -> ObjectInfo:
+        """Learn an object from training images and store it, in one transaction.
+
+        Parameters
+        ----------
+        label : str
+            The object's name (non-empty; unique in the database).
+        images : sequence of path or array
+            Training images (files OpenCV reads, or gray/RGB/RGBA arrays).
+        masks : sequence of (path, array or None), optional
+            One per image: non-zero where the object is. Keypoints are taken only inside it,
+            and its largest contour becomes the view's outline. Without a mask the whole image
+            is the object.
+        replace : bool
+            Replace an object with the same label instead of failing.
+        max_features : int
+            Keep at most this many of the strongest keypoints per image (0: all).
+        contrast_threshold : float
+            SIFT's contrast threshold for the training images (see
+            :func:`scenespeak.perception.features.detect`).
+        progress : callable, optional
+            Called as ``progress(stage, done, total)`` with stage ``"extract"`` (per image,
+            before anything is written) and ``"store"`` (per view written).
+
+        Returns
+        -------
+        ObjectInfo
+
+        Raises
+        ------
+        DatabaseError
+            Duplicate label without ``replace``, an empty label, a read-only database.
+        ImageError
+            An image (or mask) that cannot be read, or has no keypoints; the database is left
+            as it was.
+        """
+        label = str(label).strip()
+        if not label:
+            raise DatabaseError(self.path, "an object needs a non-empty label")
+        self._check_writable()
+        images = list(images)
+        if not images:
+            raise DatabaseError(self.path, f"no training images given for {label!r}")
+        mask_list = self._one_mask_per_image(label, images, masks)
+        if not replace and label in self:
+            raise DatabaseError(self.path, _duplicate(label))
+        views: list[_ViewData] = []
+        for i, (img, msk) in enumerate(zip(images, mask_list, strict=True)):
+            views.append(_extract_view(img, msk, i, max_features, contrast_threshold))
+            if progress is not None:
+                progress("extract", i + 1, len(images))
+        with self._transaction() as conn:
+            self._delete(conn, label, missing_ok=replace)
+            now = _now()
+            cur = conn.execute("INSERT INTO objects(label, added) VALUES (?, ?)", (label, now))
+            oid = int(cur.lastrowid or 0)
+            for i, v in enumerate(views):
+                _insert_view(conn, oid, v)
+                if progress is not None:
+                    progress("store", i + 1, len(views))
+        self._loaded = None
+        return ObjectInfo(oid, label, len(views), sum(len(v.features) for v in views), now)
+
+    def remove(self, label: str) -> None:
+        """Remove an object and its views (one transaction).
+
+        Raises
+        ------
+        DatabaseError
+            If there is no object with that label.
+        """
+        self._check_writable()
+        with self._transaction() as conn:
+            if not self._delete(conn, label, missing_ok=True):
+                known = ", ".join(self.labels()) or "none"
+                raise DatabaseError(
+                    self.path, f"has no object labelled {label!r} (labels: {known})"
+                )
+        self._loaded = None
+
+    def _one_mask_per_image(
+        self, label: str, images: Sequence[ImageLike], masks: Sequence[MaskLike] | None
+    ) -> list[MaskLike]:
+        mask_list: list[MaskLike] = [None] * len(images) if masks is None else list(masks)
+        if len(mask_list) != len(images):
+            raise DatabaseError(
+                self.path,
+                f"{len(mask_list)} masks for {len(images)} images of {label!r}; "
+                "give one mask per image (or none)",
+            )
+        return mask_list
+
+    @contextlib.contextmanager
+    def _transaction(self) -> Iterator[sqlite3.Connection]:
+        """One write: BEGIN IMMEDIATE, the block, the generation bumped, COMMIT — or ROLLBACK
+        on any exception (Ctrl-C included), leaving the file as it was."""
+        conn = self.conn
+        try:
+            conn.execute("BEGIN IMMEDIATE")
+            try:
+                yield conn
+                self._bump_generation()
+                conn.execute("COMMIT")
+            except BaseException:
+                conn.execute("ROLLBACK")
+                raise
+        except sqlite3.Error as exc:
+            raise DatabaseError(self.path, f"cannot write: {exc}") from None
+
+    def _delete(self, conn: sqlite3.Connection, label: str, *, missing_ok: bool) -> bool:
+        """Delete the object ``label`` and its views; False if there was none. With
+        ``missing_ok`` False an existing object is an error (a duplicate label)."""
+        old = conn.execute("SELECT id FROM objects WHERE label = ?", (label,)).fetchall()
+        if old and not missing_ok:
+            raise DatabaseError(self.path, _duplicate(label))
+        for (oid,) in old:
+            conn.execute("DELETE FROM views WHERE object_id = ?", (oid,))
+            conn.execute("DELETE FROM objects WHERE id = ?", (oid,))
+        return bool(old)
+
+    def _check_writable(self) -> None:
+        if self.readonly:
+            raise DatabaseError(self.path, "was opened read-only")
+
+    def _bump_generation(self) -> None:
+        self.conn.execute(
+            "UPDATE meta SET value = CAST(CAST(value AS INTEGER) + 1 AS TEXT) "
+            "WHERE key = 'generation'"
+        )
+
+    # -- index and labelling -------------------------------------------------------------
+
+    def load(self, *, nprobe: int = 4, seed: int = 0) -> None:
+        """Load every descriptor and build the nearest-neighbour index (done lazily).
+
+        The inverted file's trained quantiser and cell assignment are cached in the file's
+        ``index_cache`` table (written when the database is writable), so that only the first
+        load after a change trains it.
+
+        Parameters
+        ----------
+        nprobe : int
+            Inverted-file cells visited per query descriptor.
+        seed : int
+            Seed of the quantiser's training.
+
+        Raises
+        ------
+        DatabaseError
+            If the database has no objects, or a view is corrupt.
+        """
+        gen = self.generation()
+        if self._loaded is not None and self._loaded.generation == gen:
+            self._set_nprobe(nprobe)
+            return
+        self._loaded = None
+        counts = self._query("SELECT COUNT(*), COALESCE(SUM(n), 0) FROM views")[0]
+        if int(counts[0]) == 0:
+            raise DatabaseError(
+                self.path,
+                "has no objects to match against; add some with "
+                "`scenespeak db add --db FILE --label NAME IMAGE`",
+            )
+        total = int(counts[1])
+        kp, object_of, view_of, sizes, labels, outlines = self._read_views(total)
+        index = self._build_index(gen, total, sizes, nprobe, seed)
+        self._loaded = _Loaded(
+            gen, index, object_of, view_of, kp[:, :2], kp[:, 2], kp[:, 3], labels, outlines
+        )
+
+    _SELECT_VIEWS = " FROM views v JOIN objects o ON o.id = v.object_id ORDER BY v.id"
+
+    def _read_views(
+        self, total: int
+    ) -> tuple[
+        NDArray[np.float32],
+        NDArray[np.int32],
+        NDArray[np.int32],
+        list[int],
+        dict[int, str],
+        dict[int, NDArray[np.float32]],
+    ]:
+        """Every view's keypoints (x, y, size, angle), object and view of each descriptor,
+        the views' sizes, the objects' labels and the views' outlines."""
+        kp = np.empty((total, 4), np.float32)
+        object_of = np.empty(total, np.int32)
+        view_of = np.empty(total, np.int32)
+        sizes: list[int] = []
+        labels: dict[int, str] = {}
+        outlines: dict[int, NDArray[np.float32]] = {}
+        s = 0
+        try:
+            cursor = self.conn.execute(
+                "SELECT v.id, v.object_id, o.label, v.n, v.keypoints, v.outline"
+                + self._SELECT_VIEWS
+            )
+            for vid, oid, lab, n, k_blob, o_blob in cursor:
+                n = int(n)
+                try:
+                    kp[s : s + n] = np.frombuffer(k_blob, np.float32).reshape(n, 4)
+                    outline = np.frombuffer(o_blob, np.float32).reshape(-1, 2).copy()
+                except ValueError:
+                    raise DatabaseError(
+                        self.path, f"view {vid} of {lab!r} is corrupt (wrong BLOB sizes)"
+                    ) from None
+                outlines[int(vid)] = outline
+                object_of[s : s + n] = oid
+                view_of[s : s + n] = vid
+                labels[int(oid)] = str(lab)
+                sizes.append(n)
+                s += n
+        except sqlite3.DatabaseError as exc:
+            raise DatabaseError(self.path, f"cannot be read (corrupt?): {exc}") from None
+        if s != total:
+            raise DatabaseError(self.path, "is corrupt (views without an object)")
+        return kp, object_of, view_of, sizes, labels, outlines
+
+    def _descriptor_chunks(self, sizes: list[int]) -> Iterator[NDArray[np.uint8]]:
+        """The descriptors, one view at a time (in the order of :meth:`_read_views`)."""
+        try:
+            rows = self.conn.execute("SELECT v.id, v.descriptors" + self._SELECT_VIEWS)
+            for (vid, blob), n in zip(rows, sizes, strict=True):
+                if len(blob) != n * _DIM:
+                    raise DatabaseError(
+                        self.path, f"view {vid} is corrupt (wrong descriptor BLOB size)"
+                    )
+                yield np.frombuffer(blob, np.uint8).reshape(n, _DIM)
+        except (sqlite3.DatabaseError, ValueError) as exc:
+            raise DatabaseError(self.path, f"cannot be read (corrupt?): {exc}") from None
+
+    def _build_index(
+        self, gen: int, total: int, sizes: list[int], nprobe: int, seed: int
+    ) -> DescriptorIndex:
+        """The index of :attr:`index_kind` over every descriptor (a cached quantiser reused)."""
+        kind = self.index_kind
+        if kind == "auto":
+            kind = _auto_kind(total)
+        if kind == "faiss" and not _have_faiss():
+            raise DatabaseError(
+                self.path, "index 'faiss' needs the faiss-cpu package (pip install faiss-cpu)"
+            )
+        if kind in ("ivf", "faiss"):
+            centroids, cells = cached_quantiser(self.conn, gen, total)
+            cls = IVFIndex if kind == "ivf" else FaissIndex
+            index = cls.from_chunks(
+                lambda: self._descriptor_chunks(sizes),
+                total,
+                nprobe=nprobe,
+                seed=seed,
+                centroids=centroids,
+                cells=cells,
+            )
+            if centroids is None and not self.readonly:
+                save_quantiser(self.conn, gen, index)
+            return index
+        desc = np.empty((total, _DIM), np.uint8)
+        s = 0
+        for block in self._descriptor_chunks(sizes):
+            desc[s : s + block.shape[0]] = block
+            s += block.shape[0]
+        return build_index(desc, kind, nprobe=nprobe, seed=seed)
+
+    def _set_nprobe(self, nprobe: int) -> None:
+        if self._loaded is not None and hasattr(self._loaded.index, "nprobe"):
+            self._loaded.index.nprobe = nprobe  # type: ignore[attr-defined]
+
+    @property
+    def index(self) -> DescriptorIndex:
+        """The nearest-neighbour index (built on first use)."""
+        self.load()
+        assert self._loaded is not None
+        return self._loaded.index
+
+    def label(
+        self, features: Features, options: LabelOptions | None = None, **overrides: float
+    ) -> Labelling:
+        """Label query keypoints (of the scene's left image) with the database's objects.
+
+        Parameters
+        ----------
+        features : Features
+            SIFT features of the scene image (``scenespeak.perception.features.detect``).
+        options : LabelOptions, optional
+            The knobs (ratio test, RANSAC, small objects; defaults documented there).
+        **overrides
+            Single fields of :class:`LabelOptions` (``min_inliers=5``, ``small_area=0``, ...).
+
+        Returns
+        -------
+        Labelling
+
+        Raises
+        ------
+        DatabaseError
+            If the database is empty.
+        InputError
+            For a keyword that is not a field of :class:`LabelOptions`.
+        """
+        opts = LabelOptions.with_overrides(options, overrides)
+        self.load(nprobe=opts.nprobe)
+        assert self._loaded is not None
+        return label_features(self._loaded, features, opts)
+
+
+def _insert_view(conn: sqlite3.Connection, oid: int, v: _ViewData) -> None:
+    """Write one training view of object ``oid``: its features as BLOBs and its outline."""
+    f = v.features
+    kp = np.column_stack([f.xy, f.size, f.angle]).astype(np.float32)
+    conn.execute(
+        "INSERT INTO views(object_id, source, width, height, has_mask, n, "
+        "descriptors, keypoints, outline) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?)",
+        (
+            oid,
+            v.source,
+            v.width,
+            v.height,
+            int(v.has_mask),
+            len(f),
+            np.ascontiguousarray(f.descriptors, np.uint8).tobytes(),
+            kp.tobytes(),
+            np.ascontiguousarray(v.outline, np.float32).tobytes(),
+        ),
+    )

@@ -1,0 +1,132 @@
+"""Training views: an image (and mask) → SIFT features inside the object and its outline."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from os import PathLike
+
+import cv2
+import numpy as np
+from numpy.typing import NDArray
+
+from scenespeak.errors import ImageError
+from scenespeak.perception.features import Features, detect, load_image, to_gray
+
+__all__ = ["ImageLike", "MaskLike", "outline_from_mask"]
+
+
+ImageLike = str | PathLike[str] | NDArray[np.generic]
+MaskLike = str | PathLike[str] | NDArray[np.generic] | None
+
+
+# --------------------------------------------------------------------------------------------
+# Training views
+# --------------------------------------------------------------------------------------------
+
+
+def outline_from_mask(mask: NDArray[np.generic], *, tolerance: float = 1.0) -> NDArray[np.float32]:
+    """Outline of the largest region of a mask, as a simplified polygon.
+
+    Parameters
+    ----------
+    mask : (H, W) array
+        Non-zero where the object is.
+    tolerance : float
+        Douglas–Peucker tolerance in pixels.
+
+    Returns
+    -------
+    (M, 2) float32
+        Vertices (column, row), at least 3; empty ``(0, 2)`` if the mask is empty.
+
+    Examples
+    --------
+    >>> m = np.zeros((50, 60), bool); m[10:20, 5:30] = True
+    >>> outline_from_mask(m).tolist()
+    [[5.0, 10.0], [5.0, 19.0], [29.0, 19.0], [29.0, 10.0]]
+    """
+    m = (np.asarray(mask) != 0).astype(np.uint8)
+    contours, _ = cv2.findContours(m, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
+    if not contours:
+        return np.zeros((0, 2), np.float32)
+    biggest = max(contours, key=lambda c: (cv2.contourArea(c), len(c)))
+    poly = cv2.approxPolyDP(biggest, tolerance, True).reshape(-1, 2)
+    if poly.shape[0] < 3:
+        poly = biggest.reshape(-1, 2)
+    if poly.shape[0] < 3:  # a one-pixel-thin region: use its bounding box
+        x, y, w, h = cv2.boundingRect(biggest)
+        poly = np.array([[x, y], [x + w - 1, y], [x + w - 1, y + h - 1], [x, y + h - 1]])
+    return poly.astype(np.float32)
+
+
+def _border_outline(width: int, height: int) -> NDArray[np.float32]:
+    return np.array(
+        [[-0.5, -0.5], [width - 0.5, -0.5], [width - 0.5, height - 0.5], [-0.5, height - 0.5]],
+        np.float32,
+    )
+
+
+@dataclass(frozen=True)
+class _ViewData:
+    source: str
+    width: int
+    height: int
+    has_mask: bool
+    features: Features
+    outline: NDArray[np.float32]
+
+
+def _source_name(item: object, i: int, kind: str) -> str:
+    if isinstance(item, str | PathLike):
+        return str(item)
+    return f"<{kind} array {i}>"
+
+
+def _read_image(item: ImageLike, i: int) -> NDArray[np.uint8]:
+    if isinstance(item, str | PathLike):
+        return load_image(item, gray=True)
+    try:
+        return to_gray(np.asarray(item))
+    except ImageError as exc:
+        raise ImageError(_source_name(item, i, "image"), exc.problem) from None
+
+
+def _read_mask(item: MaskLike, i: int, shape: tuple[int, ...]) -> NDArray[np.bool_] | None:
+    if item is None:
+        return None
+    name = _source_name(item, i, "mask")
+    if isinstance(item, str | PathLike):
+        arr = load_image(item, gray=True)
+    else:
+        arr = np.asarray(item)
+        if arr.ndim == 3:
+            arr = arr.any(axis=2) if arr.dtype == bool else arr.max(axis=2)
+    if arr.shape[:2] != shape:
+        raise ImageError(
+            name,
+            f"mask size {arr.shape[:2]} differs from its image's {shape}; give one mask "
+            "per image, the same size",
+        )
+    m = np.asarray(arr) != 0
+    if not m.any():
+        raise ImageError(name, "the mask is empty (no object pixels)")
+    return m
+
+
+def _extract_view(
+    image: ImageLike, mask: MaskLike, i: int, max_features: int, contrast_threshold: float
+) -> _ViewData:
+    gray = _read_image(image, i)
+    h, w = gray.shape
+    m = _read_mask(mask, i, (h, w))
+    source = _source_name(image, i, "image")
+    feats = detect(gray, mask=m, max_features=max_features, contrast_threshold=contrast_threshold)
+    if len(feats) == 0:
+        raise ImageError(
+            source,
+            "no SIFT keypoints found"
+            + (" inside the mask" if m is not None else "")
+            + "; use a sharper, more textured or larger image of the object",
+        )
+    outline = outline_from_mask(m) if m is not None else _border_outline(w, h)
+    return _ViewData(source, w, h, m is not None, feats, outline)
