@@ -12,7 +12,7 @@ from scenespeak.errors import InputError, ScenespeakError
 from scenespeak.geometry.polygons import as_polygon, intersection_area, polygon_area
 from scenespeak.spatial.degrees import DIRECTIONS, DirectionDegree, many_degrees
 from scenespeak.spatial.language.relation import Relation
-from scenespeak.spatial.language.rules import _as_histogram, _coverage, _relation_from
+from scenespeak.spatial.language.rules import _as_histogram, _coverage, _Facts, _relation_from
 from scenespeak.spatial.language.thresholds import DEFAULT_THRESHOLDS, Thresholds
 from scenespeak.spatial.language.vertical import vertical_relation
 from scenespeak.spatial.language.words import _label
@@ -177,15 +177,13 @@ def relation_of_pair(
     referent = _label(referent, "referent")
     if (a_heights is None) != (b_heights is None):
         raise InputError("a_heights/b_heights", "give the heights of both objects, or neither")
-    return _describe_pair(pair, argument, referent, a_heights, b_heights, t)
+    return _describe_pair(pair, (argument, referent), (a_heights, b_heights), t)
 
 
 def _describe_pair(
     pair: PairHistograms,
-    argument: str,
-    referent: str,
-    a_heights: ArrayLike | None,
-    b_heights: ArrayLike | None,
+    names: tuple[str, str],
+    heights: tuple[ArrayLike | None, ArrayLike | None],
     t: Thresholds,
     degrees: tuple[dict[str, DirectionDegree], dict[str, DirectionDegree]] | None = None,
     heights_checked: bool = False,
@@ -196,25 +194,14 @@ def _describe_pair(
     only check the heights again and return None). ``coverage`` is ``_coverage(pair.f0)``
     when known."""
     vertical = None
+    a_heights, b_heights = heights
     skip = heights_checked and pair.horizontal_overlap < t.vertical_overlap
     if a_heights is not None and b_heights is not None and not skip:
         vertical = vertical_relation(
             a_heights, b_heights, horizontal_overlap=pair.horizontal_overlap, thresholds=t
         )
-    return _relation_from(
-        pair.f0,
-        pair.f2,
-        argument,
-        referent,
-        t,
-        overlap=pair.overlap,
-        referent_overlap=pair.referent_overlap,
-        vertical=vertical,
-        hybrid=pair.hybrid,
-        frame="object",
-        degrees=degrees,
-        coverage=coverage,
-    )
+    facts = _Facts(pair.overlap, pair.referent_overlap, vertical, pair.hybrid, "object")
+    return _relation_from(pair.f0, pair.f2, names, t, facts, degrees=degrees, coverage=coverage)
 
 
 _OPPOSITE = {"right": "left", "behind": "front", "left": "right", "front": "behind"}
@@ -252,7 +239,7 @@ def relations_of_pair(
     if pair.f0.size % 4 or pair.f0.size < 8 or pair.f2.size != pair.f0.size:
         raise InputError("pair", "histograms must have one length, a multiple of 4 (>= 8)")
     ((deg0, deg2),) = _pair_degrees([pair])
-    ab, ba, _ = _both_ways(pair, argument, referent, a_heights, b_heights, t, deg0, deg2)
+    ab, ba, _ = _both_ways(pair, (argument, referent), (a_heights, b_heights), t, (deg0, deg2))
     return ab, ba
 
 
@@ -282,19 +269,17 @@ def _pair_degrees(
 
 def _both_ways(
     pair: PairHistograms,
-    argument: str,
-    referent: str,
-    a_heights: ArrayLike | None,
-    b_heights: ArrayLike | None,
+    names: tuple[str, str],
+    heights: tuple[ArrayLike | None, ArrayLike | None],
     t: Thresholds,
-    deg0: dict[str, DirectionDegree],
-    deg2: dict[str, DirectionDegree],
+    degrees: tuple[dict[str, DirectionDegree], dict[str, DirectionDegree]],
     heights_checked: bool = False,
 ) -> tuple[Relation, Relation, PairHistograms]:
     """The rule base on a pair and on its reverse (B's degree for "left" is A's for "right").
 
     Returns the two relations and ``pair.reversed()``.
     """
+    deg0, deg2 = degrees
     back = pair.reversed()
     reversed_degrees = (
         {d: deg0[_OPPOSITE[d]] for d in DIRECTIONS},
@@ -303,10 +288,8 @@ def _both_ways(
     # The coverage of F0 turned by 180° is the same: the circular moving average turns with
     # it (each smoothed bin is the same dot product of the same numbers), the count is equal.
     cov = _coverage(pair.f0, t)
-    ab = _describe_pair(
-        pair, argument, referent, a_heights, b_heights, t, (deg0, deg2), heights_checked, cov
-    )
-    ba = _describe_pair(
-        back, referent, argument, b_heights, a_heights, t, reversed_degrees, heights_checked, cov
-    )
+    ab = _describe_pair(pair, names, heights, t, degrees, heights_checked, cov)
+    back_names = (names[1], names[0])
+    back_heights = (heights[1], heights[0])
+    ba = _describe_pair(back, back_names, back_heights, t, reversed_degrees, heights_checked, cov)
     return ab, ba, back

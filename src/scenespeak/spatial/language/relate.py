@@ -94,7 +94,8 @@ def relate_objects(
     for (i, j), pair, (deg0, deg2) in zip(index, pairs, _pair_degrees(pairs), strict=True):
         hi = checked[i] if checked is not None else None
         hj = checked[j] if checked is not None else None
-        ab, ba, back = _both_ways(pair, labels[i], labels[j], hi, hj, t, deg0, deg2, True)
+        names, hs = (labels[i], labels[j]), (hi, hj)
+        ab, ba, back = _both_ways(pair, names, hs, t, (deg0, deg2), True)
         found[i, j] = (ab, pair)
         found[j, i] = (ba, back)
     return [found[i, j] for i in range(n) for j in range(n) if i != j]

@@ -315,35 +315,34 @@ def describe_relation(
         raise InputError("f2", f"has {h2.size} bins but f0 has {h0.size}; use one `directions`")
     if vertical is not None and vertical not in VERTICAL_WORDS:
         raise InputError("vertical", f"must be one of {sorted(VERTICAL_WORDS)} or None")
-    return _relation_from(
-        h0,
-        h2,
-        argument,
-        referent,
-        t,
-        overlap=overlap,
-        referent_overlap=referent_overlap,
-        vertical=vertical,
-        hybrid=hybrid,
-        frame="object",
-    )
+    facts = _Facts(overlap, referent_overlap, vertical, hybrid, "object")
+    return _relation_from(h0, h2, (argument, referent), t, facts)
+
+
+@dataclass(frozen=True)
+class _Facts:
+    """What the rule base is told besides the histograms (see :func:`describe_relation`)."""
+
+    overlap: float | None = None
+    referent_overlap: float | None = None
+    vertical: str | None = None
+    hybrid: bool = False
+    frame: str = "object"
 
 
 def _relation_from(
     h0: NDArray[np.float64],
     h2: NDArray[np.float64],
-    argument: str,
-    referent: str,
+    names: tuple[str, str],
     t: Thresholds,
+    facts: _Facts,
     *,
-    overlap: float | None,
-    referent_overlap: float | None,
-    vertical: str | None,
-    hybrid: bool,
-    frame: str,
     degrees: tuple[dict[str, DirectionDegree], dict[str, DirectionDegree]] | None = None,
     coverage: float | None = None,
 ) -> Relation:
+    argument, referent = names
+    overlap, referent_overlap, vertical = facts.overlap, facts.referent_overlap, facts.vertical
+    hybrid, frame = facts.hybrid, facts.frame
     deg0, deg2 = (four_degrees(h0), four_degrees(h2)) if degrees is None else degrees
     decision = _decide(deg0, deg2, h0, t, overlap, referent_overlap, coverage)
     horizontal = _render(decision, argument, referent, frame)

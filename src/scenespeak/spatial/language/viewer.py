@@ -11,7 +11,7 @@ from scenespeak.errors import InputError
 from scenespeak.geometry.polygons import as_polygon, intersection_area, polygon_area
 from scenespeak.spatial.language.pairs import _histograms
 from scenespeak.spatial.language.relation import Relation
-from scenespeak.spatial.language.rules import _as_histogram, _relation_from
+from scenespeak.spatial.language.rules import _as_histogram, _Facts, _relation_from
 from scenespeak.spatial.language.thresholds import DEFAULT_THRESHOLDS, Thresholds
 from scenespeak.spatial.language.words import _label
 
@@ -52,15 +52,11 @@ def describe_viewer_relation(
     f0, f2, hybrid = _histograms(p, viewer, directions, intersecting)
     mirror = (-np.arange(directions)) % directions  # θ → −θ: +y becomes "front"
     overlap = inter / abs(polygon_area(p)) if intersecting else 0.0
+    referent_overlap = inter / viewer_size**2 if intersecting else 0.0
     return _relation_from(
         _as_histogram(f0[mirror], "f0"),
         _as_histogram(f2[mirror], "f2"),
-        label,
-        "me",
+        (label, "me"),
         t,
-        overlap=overlap,
-        referent_overlap=inter / viewer_size**2 if intersecting else 0.0,
-        vertical=None,
-        hybrid=hybrid,
-        frame="viewer",
+        _Facts(overlap, referent_overlap, None, hybrid, "viewer"),
     )
