@@ -24,7 +24,7 @@ from numpy.typing import NDArray
 
 __all__ = ["Frame", "SpatialObject"]
 
-#: Where a hull lives: ``"horizontal"`` = the horizontal plane's 2-D frame of ``interfaces.md``
+#: Where a hull lives: ``"horizontal"`` = the horizontal plane's 2-D frame of ``docs/interfaces.md``
 #: (metres; x = the camera's right, y = its forward direction); ``"image"`` = the image plane
 #: (x = column, y = image up, pixels), used when there is no depth.
 Frame = Literal["horizontal", "image"]

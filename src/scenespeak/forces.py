@@ -1,6 +1,6 @@
 """Compatibility path: ``scenespeak.forces`` is ``scenespeak.spatial.forces``.
 
-Outside scripts import ``scenespeak.forces`` (interfaces.md); the code lives in
+Outside scripts import ``scenespeak.forces`` (docs/interfaces.md); the code lives in
 :mod:`scenespeak.spatial.forces`. This module is that module under its old name.
 """
 

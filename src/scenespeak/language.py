@@ -1,6 +1,6 @@
 """Compatibility path: ``scenespeak.language`` is ``scenespeak.spatial.language``.
 
-Outside scripts import ``scenespeak.language`` (interfaces.md); the code lives in
+Outside scripts import ``scenespeak.language`` (docs/interfaces.md); the code lives in
 :mod:`scenespeak.spatial.language`. This module is that module under its old name.
 """
 

@@ -33,7 +33,7 @@ after the other and about 1.4–1.5× the two run in two threads as here; after 
 limited to one thread (the matrices are small; a second OpenBLAS thread made a 200 × 128 ×
 200 product 150× slower when the other core was busy).
 
-:meth:`SceneDescription.to_dict` gives exactly the JSON of ``interfaces.md`` (plus extra
+:meth:`SceneDescription.to_dict` gives exactly the JSON of ``docs/interfaces.md`` (plus extra
 fields); :meth:`SceneDescription.to_text` the sentences for people.
 """
 
@@ -160,7 +160,7 @@ class PairRelation:
         return getattr(self.relation, name)
 
     def to_dict(self) -> dict[str, Any]:
-        """The ``relations`` entry of ``interfaces.md`` plus :meth:`Relation.to_dict`'s extras."""
+        """The ``relations`` entry of ``docs/interfaces.md`` plus ``Relation.to_dict``'s extras."""
         rel = self.relation
         head: dict[str, Any] = {
             "argument": rel.argument,
@@ -253,7 +253,7 @@ class SceneDescription:
         return None
 
     def to_dict(self) -> dict[str, Any]:
-        """The JSON of ``scenespeak describe --format json`` (``interfaces.md``), plus extras.
+        """The JSON of ``scenespeak describe --format json`` (``docs/interfaces.md``), plus extras.
 
         ``objects`` (label, points, centroid, hull; extras: source, notes, plane_centroid,
         height_range), ``relations`` (argument, referent, primary, secondary, sentence, f0, f2;

@@ -33,7 +33,7 @@ from scenespeak.tools.figures import (
     write_report,
 )
 
-# Middlebury 2014 motorcycle, down-sampled (docs: /work/shared/design/vision-notes.md).
+# Middlebury 2014 motorcycle, down-sampled (the real-data README describes it).
 FOCAL, CX, CY, DOFFS, BASELINE = 994.978, 311.193, 254.877, 31.086, 0.193001
 
 

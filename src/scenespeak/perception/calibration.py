@@ -288,7 +288,7 @@ class StereoRig:
             )
 
     def to_dict(self) -> dict[str, Any]:
-        """The JSON full form of the rig (see ``interfaces.md``)."""
+        """The JSON full form of the rig (see ``docs/interfaces.md``)."""
         return {
             "image_size": list(self.image_size),
             "K_left": self.K_left.tolist(),
@@ -533,7 +533,8 @@ def load_rig(path: str | PathLike[str], *, image_size: tuple[int, int] | None = 
     Parameters
     ----------
     path : str or path-like
-        ``.json`` (short or full form of ``interfaces.md``, or OpenCV names), ``.yml``/``.yaml``
+        ``.json`` (short or full form of ``docs/interfaces.md``, or OpenCV names),
+        ``.yml``/``.yaml``
         (OpenCV FileStorage with ``!!opencv-matrix``, or plain YAML with the same keys) or
         ``.xml`` (OpenCV FileStorage).
     image_size : (w, h), optional

@@ -2,7 +2,7 @@
 
 Everything here works on plain arrays: points in the left camera's OpenCV frame (X right, Y
 down, Z forward, metres) and a world ``up`` direction in that frame. The horizontal plane's 2-D
-frame is fixed in ``interfaces.md``: x = the camera's right direction projected onto the plane,
+frame is fixed in ``docs/interfaces.md``: x = the camera's right direction projected onto the plane,
 y = its forward direction projected (depth); a level rig (``up = [0, -1, 0]``) gives (X, Z).
 
 Steps for one object, as in the seed paper (section III/IV) with its "future work" done:

@@ -1000,7 +1000,7 @@ def stereo_points(
 
 
 def points_to_json(points: Points3D, *, decimals: int = 6) -> dict[str, Any]:
-    """The ``scenespeak points --format json`` object of ``interfaces.md``.
+    """The ``scenespeak points --format json`` object of ``docs/interfaces.md``.
 
     >>> points_to_json(Points3D.empty())
     {'points': []}

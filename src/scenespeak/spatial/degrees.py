@@ -34,7 +34,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-#: The four directions, in the order of their angles 0, 90, 180, 270 degrees (interfaces.md:
+#: The four directions, in the order of their angles 0, 90, 180, 270 degrees (docs/interfaces.md:
 #: 0 = right, 90 = behind = farther from the camera, 180 = left, 270 = in front).
 DIRECTIONS: tuple[str, str, str, str] = ("right", "behind", "left", "front")
 

@@ -1,7 +1,7 @@
 """Hand-made layouts on the horizontal plane (private): the seed paper's scenes and one layout
 per sentence pattern. Used by the tests and by :func:`scenespeak.spatial.language.layout_table`.
 
-Coordinates are the horizontal plane's 2-D frame of ``interfaces.md`` in metres: x = the
+Coordinates are the horizontal plane's 2-D frame of ``docs/interfaces.md`` in metres: x = the
 camera's right, y = depth (larger y = farther = "behind"). The camera is at the origin.
 The seed's scenes (Fig. 8–11) are rebuilt from the figures' captions and sentences: the hulls
 in the paper are not given numerically, so these are layouts that match each description.

@@ -275,7 +275,7 @@ def plot_points_3d(
 
     As in the seed paper's Fig. 5 (b): the points in their object colour, their shadows on the
     floor (horizontal plane, cyan) and on the back wall (vertical plane facing the camera, red).
-    Axes are the horizontal plane's frame of interfaces.md: x to the camera's right, y forward
+    Axes are the horizontal plane's frame of docs/interfaces.md: x to the camera's right, y forward
     (depth), z up; the camera sits at the origin.
 
     Parameters

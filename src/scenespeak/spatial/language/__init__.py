@@ -19,7 +19,7 @@ behind." The steps, each with the threshold that governs it (see :class:`Thresho
 6. the vertical plane (:func:`vertical_relation`): "on top of", "above", "below", "under" — it
    takes precedence over the horizontal words when one object stands over the other.
 
-Directions follow ``interfaces.md``: angle 0 = right, 90° = behind (farther from the camera),
+Directions follow ``docs/interfaces.md``: angle 0 = right, 90° = behind (farther from the camera),
 180° = left, 270° = in front (nearer the camera).
 
 >>> import numpy as np

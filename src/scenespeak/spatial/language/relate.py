@@ -46,7 +46,7 @@ def relate_objects(
     Parameters
     ----------
     hulls : sequence of array_like, shape (N, 2)
-        The objects' footprints on the horizontal plane (the 2-D frame of ``interfaces.md``,
+        The objects' footprints on the horizontal plane (the 2-D frame of ``docs/interfaces.md``,
         metres).
     names : sequence of str
         Their labels, one per hull.
