@@ -657,7 +657,12 @@ def _dense_regions(
         if not union.any():
             return {}
         ys, xs = np.nonzero(union)
-        roi = (int(xs.min()), int(ys.min()), int(xs.max()) + 1, int(ys.max()) + 1)
+        roi: tuple[int, int, int, int] | None = (
+            int(xs.min()),
+            int(ys.min()),
+            int(xs.max()) + 1,
+            int(ys.max()) + 1,
+        )
         if result.rect.needs_resampling:
             roi = None  # the outline is in input pixels; the map is rectified
         dense = stereo.dense_disparity(

@@ -34,7 +34,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from os import PathLike
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import cv2
 import numpy as np
@@ -466,7 +466,7 @@ class _OpenCVYamlLoader(yaml.SafeLoader):
 
 
 def _construct_opencv_matrix(loader: yaml.SafeLoader, node: yaml.Node) -> dict[str, Any]:
-    m = loader.construct_mapping(node, deep=True)  # type: ignore[arg-type]
+    m = loader.construct_mapping(node, deep=True)
     return dict(m)
 
 
@@ -772,8 +772,8 @@ class Rectification:
         lx, ly = self.maps_left
         rx, ry = self.maps_right
         return (
-            cv2.remap(left, lx, ly, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT),
-            cv2.remap(right, rx, ry, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT),
+            cv2.remap(_cv(left), lx, ly, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT),
+            cv2.remap(_cv(right), rx, ry, cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT),
         )
 
     def to_original(self, xyz_rect: ArrayLike) -> NDArray[np.float64]:
@@ -841,15 +841,21 @@ def rectify(rig: StereoRig, *, alpha: float = 1.0) -> Rectification:
         raise CalibrationError(rig.source, "OpenCV could not rectify this rig (degenerate)")
     m1 = cv2.initUndistortRectifyMap(K1, rig.dist_left, R1, P1, size, cv2.CV_32FC1)
     m2 = cv2.initUndistortRectifyMap(K2, rig.dist_right, R2, P2, size, cv2.CV_32FC1)
+    # OpenCV returns float64 matrices and float32 maps: np.asarray gives the same arrays, typed.
     return Rectification(
         rig,
-        _readonly(R1),
-        _readonly(R2),
-        _readonly(P1),
-        _readonly(P2),
-        (m1[0], m1[1]),
-        (m2[0], m2[1]),
+        _readonly(np.asarray(R1, np.float64)),
+        _readonly(np.asarray(R2, np.float64)),
+        _readonly(np.asarray(P1, np.float64)),
+        _readonly(np.asarray(P2, np.float64)),
+        (np.asarray(m1[0], np.float32), np.asarray(m1[1], np.float32)),
+        (np.asarray(m2[0], np.float32), np.asarray(m2[1], np.float32)),
     )
+
+
+def _cv(image: NDArray[np.generic]) -> NDArray[np.uint8 | np.float32]:
+    """An image as OpenCV's stubs want it typed (the same array)."""
+    return cast("NDArray[np.uint8 | np.float32]", image)
 
 
 # --------------------------------------------------------------------------------------------

@@ -143,7 +143,7 @@ def load_image(path: str | PathLike[str], *, gray: bool = True) -> NDArray[np.ui
         raise ImageError(p, "cannot be read as an image (corrupt or unsupported format)")
     if not gray:
         image = cv2.cvtColor(image, cv2.COLOR_BGR2RGB)
-    return image
+    return np.asarray(image, dtype=np.uint8)  # imdecode gives uint8: the same array
 
 
 def detect(
@@ -185,13 +185,15 @@ def detect(
         cv_mask = m.astype(np.uint8) * 255
     precise = precise_upscale
     try:
-        sift = cv2.SIFT_create(
+        sift = cv2.SIFT_create(  # type: ignore[attr-defined]
             nfeatures=max_features,
             contrastThreshold=contrast_threshold,
             enable_precise_upscale=precise_upscale,
         )
     except TypeError:  # older OpenCV without enable_precise_upscale
-        sift = cv2.SIFT_create(nfeatures=max_features, contrastThreshold=contrast_threshold)
+        sift = cv2.SIFT_create(  # type: ignore[attr-defined]
+            nfeatures=max_features, contrastThreshold=contrast_threshold
+        )
         precise = False
     keypoints, descriptors = sift.detectAndCompute(gray, cv_mask)
     if not keypoints or descriptors is None:

@@ -685,6 +685,21 @@ def _disparity_range(
     return mn, num
 
 
+#: SGBM's smoothness penalties per pixel of the block (one gray channel): P1 = 8·bs², P2 =
+#: 32·bs², the values OpenCV's StereoSGBM documentation and its stereo_match sample give.
+SGBM_P1_PER_PIXEL = 8
+SGBM_P2_PER_PIXEL = 32
+#: Left-right check: disparities whose right-to-left match differs by more than 1 px are
+#: dropped (OpenCV's stereo_match sample uses 1).
+SGBM_DISP12_MAX_DIFF = 1
+#: Speckle filter: connected regions of at most 100 px whose disparity varies by at most 2 px
+#: (OpenCV multiplies speckleRange by 16 for its fixed-point map) are noise and removed;
+#: OpenCV's StereoSGBM docs suggest a window "somewhere in the 50-200 range" and a range of
+#: "1 or 2".
+SGBM_SPECKLE_WINDOW = 100
+SGBM_SPECKLE_RANGE = 2
+
+
 def dense_disparity(
     left: NDArray[np.generic],
     right: NDArray[np.generic],
@@ -731,7 +746,7 @@ def dense_disparity(
     gr = to_gray(right)
     if gl.shape != gr.shape:
         raise ImageError("dense_disparity", f"images differ in size: {gl.shape} vs {gr.shape}")
-    gl, gr = rect.rectify_images(gl, gr)
+    gl, gr = (np.asarray(g, dtype=np.uint8) for g in rect.rectify_images(gl, gr))
     h, w = gl.shape
     kd = None if keypoint_disparities is None else np.asarray(keypoint_disparities, float)
     mn_auto, num_auto = _disparity_range(rect, kd)
@@ -759,19 +774,19 @@ def dense_disparity(
     cl = np.ascontiguousarray(gl[ya:yb, xa:xb])
     cr = np.ascontiguousarray(gr[ya:yb, xa:xb])
     if border:
-        cl = cv2.copyMakeBorder(cl, 0, 0, border, 0, cv2.BORDER_CONSTANT, value=0)
-        cr = cv2.copyMakeBorder(cr, 0, 0, border, 0, cv2.BORDER_CONSTANT, value=0)
+        cl = np.asarray(cv2.copyMakeBorder(cl, 0, 0, border, 0, cv2.BORDER_CONSTANT, value=0))
+        cr = np.asarray(cv2.copyMakeBorder(cr, 0, 0, border, 0, cv2.BORDER_CONSTANT, value=0))
     bs = int(block_size) | 1
-    sgbm = cv2.StereoSGBM_create(
+    sgbm = cv2.StereoSGBM_create(  # type: ignore[attr-defined]
         minDisparity=mn,
         numDisparities=num,
         blockSize=bs,
-        P1=8 * bs * bs,
-        P2=32 * bs * bs,
-        disp12MaxDiff=1,
+        P1=SGBM_P1_PER_PIXEL * bs * bs,
+        P2=SGBM_P2_PER_PIXEL * bs * bs,
+        disp12MaxDiff=SGBM_DISP12_MAX_DIFF,
         uniquenessRatio=uniqueness,
-        speckleWindowSize=100,
-        speckleRange=2,
+        speckleWindowSize=SGBM_SPECKLE_WINDOW,
+        speckleRange=SGBM_SPECKLE_RANGE,
         mode=cv2.STEREO_SGBM_MODE_SGBM_3WAY,
     )
     raw = sgbm.compute(cl, cr)

@@ -309,7 +309,7 @@ def plot_points_3d(
     if len(world):
         finite = np.isfinite(world).all(axis=1)
         world = world[finite]
-        labs = [lab for lab, ok in zip(labs, finite, strict=True) if ok]
+        labs = [labs[k] for k in np.flatnonzero(finite).tolist()]
     if len(world):
         lo, hi = world.min(axis=0), world.max(axis=0)
         pad = 0.1 * np.maximum(hi - lo, 0.05)
@@ -663,28 +663,23 @@ def _scene_figures(
     """Names and builders of the figures this scene has the data for."""
     colors = label_colors([*(view.point_labels or []), *view.hulls, *view.plane_points])
     out: list[tuple[str, Callable[[], Figure]]] = []
-    if (
-        view.left is not None
-        and view.right is not None
-        and view.left_xy is not None
-        and view.right_xy is not None
-    ):
+    left, right, left_xy, right_xy = view.left, view.right, view.left_xy, view.right_xy
+    if left is not None and right is not None and left_xy is not None and right_xy is not None:
         lbl = view.match_labels
-        if lbl is not None and len(lbl) != len(view.left_xy):
+        if lbl is not None and len(lbl) != len(left_xy):
             lbl = None
         out.append(
             (
                 "matches",
-                lambda: plot_matches(
-                    view.left, view.right, view.left_xy, view.right_xy, lbl, colors=colors
-                ),
+                lambda: plot_matches(left, right, left_xy, right_xy, lbl, colors=colors),
             )
         )
-    if view.xyz is not None and len(view.xyz):
+    xyz = view.xyz
+    if xyz is not None and len(xyz):
         out.append(
             (
                 "points3d",
-                lambda: plot_points_3d(view.xyz, view.point_labels, up=view.up, colors=colors),
+                lambda: plot_points_3d(xyz, view.point_labels, up=view.up, colors=colors),
             )
         )
     if view.hulls:

@@ -127,7 +127,7 @@ def write_box_obj(path: Path, w: float, d: float, h: float) -> None:
     """Box with its base centre at the origin; front (-y) and back faces show the whole photo,
     the sides its left/right quarter strips, top and bottom its centre."""
     x, y, z = w / 2, d / 2, h
-    faces = [
+    faces: list[tuple[list[Sequence[float]], Sequence[float], tuple[float, ...]]] = [
         ([(-x, -y, 0), (x, -y, 0), (x, -y, z), (-x, -y, z)], (0, -1, 0), (0, 0, 1, 1)),
         ([(x, y, 0), (-x, y, 0), (-x, y, z), (x, y, z)], (0, 1, 0), (0, 0, 1, 1)),
         ([(x, -y, 0), (x, y, 0), (x, y, z), (x, -y, z)], (1, 0, 0), (0.75, 0, 1, 1)),

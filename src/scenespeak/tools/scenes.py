@@ -152,8 +152,8 @@ def make_rig(
 ) -> Rig:
     """The level rig (0.25 m high) or the pitched rig (0.45 m high, ``pitch_deg`` down)."""
     if pitched:
-        return Rig(pitch_deg, 0.45, baseline, hfov_deg, tuple(image_size))
-    return Rig(0.0, 0.25, baseline, hfov_deg, tuple(image_size))
+        return Rig(pitch_deg, 0.45, baseline, hfov_deg, _size(image_size))
+    return Rig(0.0, 0.25, baseline, hfov_deg, _size(image_size))
 
 
 @dataclass(frozen=True)
@@ -467,7 +467,7 @@ def _truth_dict(placed: Sequence[Placement], rig: Rig, seg: NDArray[np.int32]) -
     left = rig.camera("left")
     basis = ground_basis(rig.up)
     s = SUPERSAMPLE
-    objects = []
+    objects: list[dict[str, Any]] = []
     sil = [_silhouette(left, p) for p in placed]
     for k, pl in enumerate(placed):
         c = left.to_camera(pl.centroid_world()[None])[0]
@@ -650,7 +650,7 @@ def render_training_views(
     out.mkdir(parents=True, exist_ok=True)
     cam_h = obj.size[2] / 2 + 0.15
     a = np.arctan2(0.15, distance)
-    rig = Rig(float(np.degrees(a)), cam_h, 0.0, hfov_deg, tuple(image_size))
+    rig = Rig(float(np.degrees(a)), cam_h, 0.0, hfov_deg, _size(image_size))
     cam = rig.camera()
     written = []
     for k, yaw in enumerate(yaws):
@@ -790,11 +790,11 @@ def generate_dataset(
                 progress(done, total)
     for i, name in enumerate(names):
         if not (out / name / "truth.json").exists():
-            p = pitched if pitched != "mixed" else bool(i % 2)
+            tilt = pitched if pitched != "mixed" else bool(i % 2)
             generate_scene(
                 out / name,
                 seed=_scene_seed(seed, i),
-                pitched=bool(p),
+                pitched=bool(tilt),
                 image_size=image_size,
                 hfov_deg=hfov_deg,
                 baseline=baseline,
@@ -850,6 +850,16 @@ def load_dataset(dataset_dir: str | PathLike[str]) -> Dataset:
     return Dataset(root, int(meta.get("seed", 0)), objects, scenes, meta)
 
 
+def _size(image_size: Sequence[int]) -> tuple[int, int]:
+    w, h = image_size
+    return int(w), int(h)
+
+
+def _xyz(values: Sequence[float]) -> tuple[float, float, float]:
+    x, y, z = values
+    return float(x), float(y), float(z)
+
+
 def load_truth(scene_dir: str | PathLike[str]) -> SceneTruth:
     """Read ``scene_dir/truth.json`` into a :class:`SceneTruth`.
 
@@ -870,13 +880,13 @@ def load_truth(scene_dir: str | PathLike[str]) -> SceneTruth:
         objects = tuple(
             TruthObject(
                 label=str(o["label"]),
-                centroid=tuple(float(v) for v in o["centroid"]),
+                centroid=_xyz(o["centroid"]),
                 footprint=tuple((float(a), float(b)) for a, b in o.get("footprint", [])),
                 distance=float(o.get("distance", np.linalg.norm(o["centroid"]))),
                 visible_fraction=float(o.get("visible_fraction", 1.0)),
                 index=int(o.get("index", k + 1)),
                 shape=str(o.get("shape", "")),
-                size=tuple(float(v) for v in o.get("size", (0, 0, 0))),
+                size=_xyz(o.get("size", (0, 0, 0))),
                 on=o.get("on"),
             )
             for k, o in enumerate(data["objects"])

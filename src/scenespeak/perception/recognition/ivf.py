@@ -6,7 +6,7 @@ from __future__ import annotations
 import itertools
 from collections.abc import Callable, Iterator
 from concurrent.futures import ThreadPoolExecutor
-from typing import Any, Self
+from typing import Any, Self, cast
 
 import numpy as np
 from numpy.typing import NDArray
@@ -157,7 +157,7 @@ class _IndexBuilder:
         chunks: Callable[[], Iterator[NDArray[np.uint8]]],
         n: int,
         assign: NDArray[np.intp],
-        **extra: Any,
+        threads: int | None = None,
     ) -> None:
         """Store the descriptors under their coarse cells ``assign`` (subclass-specific)."""
         raise NotImplementedError
@@ -240,7 +240,7 @@ class IVFIndex(_IndexBuilder):
         cell_sorted = np.repeat(np.arange(self.nlist), counts)
         out = np.empty(self.ntotal, np.uint16 if self.nlist <= 65535 else np.int32)
         out[self._ids] = cell_sorted
-        return out
+        return cast("NDArray[np.uint16 | np.int32]", out)
 
     @property
     def ntotal(self) -> int:
@@ -476,7 +476,9 @@ class FaissIndex(_IndexBuilder):
         chunks: Callable[[], Iterator[NDArray[np.uint8]]],
         n: int,
         assign: NDArray[np.intp],
+        threads: int | None = None,
     ) -> None:
+        """The FAISS index of the cells (``threads``: FAISS chooses its own)."""
         import faiss  # optional dependency
 
         nl = self.centroids.shape[0]
@@ -501,7 +503,7 @@ class FaissIndex(_IndexBuilder):
 
     def cells(self) -> NDArray[np.uint16 | np.int32]:
         """The coarse cell of every descriptor, in the order they were given (for caching)."""
-        return self._cells
+        return cast("NDArray[np.uint16 | np.int32]", self._cells)
 
     @property
     def ntotal(self) -> int:

@@ -5,7 +5,7 @@ from __future__ import annotations
 import sqlite3
 from datetime import UTC, datetime
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, cast
 
 import numpy as np
 from numpy.typing import NDArray
@@ -120,7 +120,7 @@ def cached_quantiser(
     cells = np.frombuffer(rows[0][3], dtype)
     if cells.size and int(cells.max()) >= centroids.shape[0]:
         return None, None
-    return centroids, cells
+    return centroids, cast("NDArray[np.integer]", cells)
 
 
 def save_quantiser(conn: sqlite3.Connection, gen: int, index: IVFIndex | FaissIndex) -> None:

@@ -545,7 +545,7 @@ class ObjectDatabase:
 
     def _set_nprobe(self, nprobe: int) -> None:
         if self._loaded is not None and hasattr(self._loaded.index, "nprobe"):
-            self._loaded.index.nprobe = nprobe  # type: ignore[attr-defined]
+            self._loaded.index.nprobe = nprobe
 
     @property
     def index(self) -> DescriptorIndex:

@@ -156,7 +156,7 @@ def _fit_homography(
     t_xy = train.xy
     src = t_xy.astype(np.float32)
     dst = query.xy.astype(np.float32)
-    h, _ = cv2.findHomography(
+    found, _ = cv2.findHomography(
         src,
         dst,
         cv2.RANSAC,
@@ -164,12 +164,16 @@ def _fit_homography(
         maxIters=RANSAC_MAX_ITERS,
         confidence=RANSAC_CONFIDENCE,
     )
-    if h is None or not _plausible(h, outline, t_xy):
+    if found is None:
+        return None
+    h = np.asarray(found, dtype=np.float64)  # OpenCV returns float64: the same array
+    if not _plausible(h, outline, t_xy):
         return None
     inl = _consistent(h, train, query, o)
     if inl.sum() >= 4:
         # Refit on the consistent inliers (least squares), then re-check.
-        h2, _ = cv2.findHomography(src[inl], dst[inl], 0)
+        refit, _ = cv2.findHomography(src[inl], dst[inl], 0)
+        h2 = None if refit is None else np.asarray(refit, dtype=np.float64)
         if h2 is not None and _plausible(h2, outline, t_xy[inl]):
             # The refit often returns the very same matrix (then so is the verdict).
             inl2 = inl if np.array_equal(h2, h) else _consistent(h2, train, query, o)
@@ -191,7 +195,7 @@ def _fit_similarity(
     )
     if a is None:
         return None
-    h = np.vstack([a, [0.0, 0.0, 1.0]])
+    h = np.vstack([a, [0.0, 0.0, 1.0]]).astype(np.float64, copy=False)
     if not _plausible(h, outline, train.xy):
         return None
     return _Fit(h, _consistent(h, train, query, o), "similarity")

@@ -95,12 +95,13 @@ def _read_mask(item: MaskLike, i: int, shape: tuple[int, ...]) -> NDArray[np.boo
     if item is None:
         return None
     name = _source_name(item, i, "mask")
+    arr: NDArray[np.generic]
     if isinstance(item, str | PathLike):
         arr = load_image(item, gray=True)
     else:
         arr = np.asarray(item)
         if arr.ndim == 3:
-            arr = arr.any(axis=2) if arr.dtype == bool else arr.max(axis=2)
+            arr = np.asarray(arr.any(axis=2) if arr.dtype == bool else arr.max(axis=2))
     if arr.shape[:2] != shape:
         raise ImageError(
             name,

@@ -92,6 +92,8 @@ class Relation:
 
         Examples
         --------
+        >>> import numpy as np
+        >>> from scenespeak.spatial.language import describe_relation
         >>> h = np.zeros(180); h[90] = 1.0
         >>> d = describe_relation(h, h, argument="mug", referent="can").to_dict()
         >>> d["primary"], d["secondary"], d["sentence"]

@@ -41,6 +41,7 @@ def summarize_scene(
 
     Examples
     --------
+    >>> from scenespeak.spatial.language import relate
     >>> sq = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
     >>> objs = {"can": sq, "hat": sq + [2.0, 0.0], "mug": sq + [4.0, 0.0]}
     >>> rels = [relate(objs[x], objs[y], argument=x, referent=y)
