@@ -144,7 +144,6 @@ def _scene_pairs(
 ) -> list[PairHistograms]:
     """:class:`PairHistograms` of every pair ``(i, j)`` of ``index``: the same floats as
     ``pair_histograms(polygons[i], polygons[j])``, with one force sweep for all pairs."""
-    from scenespeak.spatial import forces
 
     areas = [abs(polygon_area(p)) for p in polygons]
     convex = [is_convex(p) for p in polygons]
@@ -156,22 +155,7 @@ def _scene_pairs(
     intersecting = [
         x > 1e-12 * min(areas[i], areas[j]) for x, (i, j) in zip(inter, index, strict=True)
     ]
-    # F0 and F2 of all pairs of prepared regions in one sweep (F02 where F2 is undefined).
-    prepared = [
-        k for k, (i, j) in enumerate(index) if regions[i] is not None and regions[j] is not None
-    ]
-    # Regions that failed to prepare are None: only the others go to the sweep.
-    usable = [r for r in regions if r is not None]
-    slot = {id(r): g for g, r in enumerate(usable)}
-    swept = forces.f0_f2_pairs(
-        usable,
-        [(slot[id(regions[index[k][0]])], slot[id(regions[index[k][1]])]) for k in prepared],
-        directions,
-        try_f2=[not intersecting[k] for k in prepared],
-    )
-    histograms = {
-        k: (swept.f0[q], swept.f2[q], bool(swept.hybrid[q])) for q, k in enumerate(prepared)
-    }
+    histograms = _swept(regions, index, intersecting, directions)
     raw: list[NDArray[np.float64]] = []
     hybrids: list[bool] = []
     for k, (i, j) in enumerate(index):
@@ -187,6 +171,31 @@ def _scene_pairs(
         PairHistograms(checked[2 * k], checked[2 * k + 1], hybrids[k], inter[k], areas[i], areas[j])
         for k, (i, j) in enumerate(index)
     ]
+
+
+def _swept(
+    regions: Sequence[Any],
+    index: Sequence[tuple[int, int]],
+    intersecting: Sequence[bool],
+    directions: int,
+) -> dict[int, tuple[NDArray[np.float64], NDArray[np.float64], bool]]:
+    """F0 and F2 (F02 where F2 is undefined) of every pair ``k`` whose two regions are
+    prepared, in one sweep: ``{k: (f0, f2, hybrid)}``."""
+    from scenespeak.spatial import forces
+
+    prepared = [
+        k for k, (i, j) in enumerate(index) if regions[i] is not None and regions[j] is not None
+    ]
+    # Regions that failed to prepare are None: only the others go to the sweep.
+    usable = [r for r in regions if r is not None]
+    slot = {id(r): g for g, r in enumerate(usable)}
+    swept = forces.f0_f2_pairs(
+        usable,
+        [(slot[id(regions[index[k][0]])], slot[id(regions[index[k][1]])]) for k in prepared],
+        directions,
+        try_f2=[not intersecting[k] for k in prepared],
+    )
+    return {k: (swept.f0[q], swept.f2[q], bool(swept.hybrid[q])) for q, k in enumerate(prepared)}
 
 
 def relate(
