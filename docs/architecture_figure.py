@@ -13,6 +13,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 from matplotlib.patches import FancyArrowPatch, FancyBboxPatch
 
+GEOMETRY = "geometry/  polygons: area, convexity, clipping, exact intersection"
+PIPELINE = "pipeline.py  composes the stages (per-stage options, typed results)"
 ROOMS = {
     # name: (x, y, w, h, colour, lines)
     "perception": (0.2, 3.0, 6.2, 2.6, "#dbe9f6", "perception/  pixels → 3-D objects"),
@@ -23,7 +25,7 @@ ROOMS = {
         12.6,
         1.1,
         "#f0e6d8",
-        "geometry/  polygons: area, convexity, clipping, exact intersection",
+        GEOMETRY,
     ),
     "contract": (5.35, 1.75, 2.7, 0.9, "#fff3bf", "contract.SpatialObject"),
     "pipeline": (
@@ -32,7 +34,7 @@ ROOMS = {
         12.6,
         0.8,
         "#eeeeee",
-        "pipeline.py  composes the stages (per-stage options, typed results)",
+        PIPELINE,
     ),
     "tools": (0.2, 7.2, 7.0, 0.8, "#f6e0e6", "tools/  scene generator · evaluation · figures"),
     "cli": (7.5, 7.2, 5.3, 0.8, "#e8e0f6", "cli/  one module per command"),
@@ -54,7 +56,7 @@ FLOW = [(0, 2), (1, 2), (1, 3), (2, 4), (3, 4), (5, 6), (6, 7), (7, 8)]
 
 def main() -> Path:
     fig, ax = plt.subplots(figsize=(11, 6.6))
-    for name, (x, y, w, h, colour, text) in ROOMS.items():
+    for x, y, w, h, colour, text in ROOMS.values():
         ax.add_patch(
             FancyBboxPatch((x, y), w, h, boxstyle="round,pad=0.05", fc=colour, ec="#555555")
         )
