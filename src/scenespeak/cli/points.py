@@ -63,10 +63,42 @@ def points_cmd(
         _write_text(out, text + "\n")
 
 
+#: Pixels around the matches' box that the dense check covers (the pipeline's
+#: ``PipelineOptions.dense_margin``).
+DENSE_MARGIN = 16
+
+
 def _stereo_points(
     stereo: Any, left: Any, right: Any, rig: Any, *, ratio: float, sources: tuple[Path, Path]
 ) -> Any:
+    """The pipeline's stereo stage: SIFT of both images at once, the dense check cropped.
+
+    OpenCV releases the GIL in SIFT, so the right image's extraction runs in a second thread
+    while this one does the left's; the dense SGBM check covers only the matches' bounding box
+    plus :data:`DENSE_MARGIN` pixels (``stereo_points(dense_crop=True)``) instead of the whole
+    image. The points are those of the plain ``stereo_points(left, right, rig)``
+    (``tests/cli/test_points_fast.py``).
+    """
+    from concurrent.futures import ThreadPoolExecutor
+
+    from scenespeak.perception.features import detect, to_gray
+
+    names = (str(sources[0]), str(sources[1]))
+    stereo.check_pair(left, right, rig, left_name=names[0], right_name=names[1])
+    with ThreadPoolExecutor(max_workers=1) as pool:
+        future = pool.submit(detect, to_gray(right), precise_upscale=False)
+        features_left = detect(to_gray(left), precise_upscale=False)
+        features_right = future.result()
     result = stereo.stereo_points(
-        left, right, rig, ratio=ratio, left_name=str(sources[0]), right_name=str(sources[1])
+        left,
+        right,
+        rig,
+        ratio=ratio,
+        features_left=features_left,
+        features_right=features_right,
+        left_name=names[0],
+        right_name=names[1],
+        dense_crop=True,
+        dense_margin=DENSE_MARGIN,
     )
     return result.points
