@@ -244,6 +244,9 @@ def _graded(rel: DialogueRelation, asked: str, scene: DialogueScene) -> tuple[st
             d,
         )
     hedge = "probably " if probably else ""
+    if rel.kind == "compound" and rel.secondary is not None:
+        side = {"front": "front", "behind": "rear"}[p]
+        return f"No, it is {hedge}{side}-{rel.secondary} of the {ref}.", d
     return f"No, it is {hedge}{relation_phrase(p)} the {ref}.", d
 
 

@@ -6,8 +6,9 @@ depth error σ_Z = Z²·σ_d/(f·B) (e.g. Gallup et al., "Variable baseline/reso
 CVPR 2008, eq. 1). Each object's centre moves along its viewing ray by that much; carried
 through the angle of the vector between two centres (first order) this gives σ_θ, and the
 relation "would change under that error" when its angular margin to the next direction's sector
-(45° minus the deviation of the effective forces from the primary direction) is less than
-``HEDGE_Z`` × σ_θ. Then the words say "probably".
+(45° minus the deviation of the effective forces from the primary direction; for a compound
+such as "front-left of", 45° minus the offset from the diagonal: it is wrong only outside the
+quadrant it names) is less than ``HEDGE_Z`` × σ_θ. Then the words say "probably".
 
 :func:`relation_confidence` maps three features — the rule base's self-assessment, the primary
 direction's degree of truth and that margin in units of σ_θ — to the probability that the
@@ -42,11 +43,6 @@ __all__ = [
 #: Margins below this many standard deviations of the angle make the words say "probably"
 #: (one σ: the relation flips under the depth error with a probability above about 16 %).
 HEDGE_Z = 1.0
-
-#: Half-width (degrees) of the region around a diagonal where the rule base says a compound
-#: ("rear-left of"): both neighbours' degrees within 0.15 of each other, and a degree falls by
-#: about 1/90 per degree off its direction, so |offset| < 0.15 · 90 / 2 = 6.75°.
-COMPOUND_HALF_WIDTH = 6.75
 
 
 def depth_error(z: float, *, focal_px: float, baseline_m: float, sigma_px: float) -> float:
@@ -89,8 +85,8 @@ def margin_z(rel: DialogueRelation, scene: DialogueScene) -> float:
     if rel.primary not in DIRECTION_ANGLE:
         return 10.0
     margin = 45.0 - abs(rel.deviation_deg)
-    if rel.kind == "compound":  # said within ±COMPOUND_HALF_WIDTH of the diagonal
-        margin = COMPOUND_HALF_WIDTH - abs(45.0 - abs(rel.deviation_deg))
+    if rel.kind == "compound":  # "front-left of" is wrong only outside the quadrant it names
+        margin = 45.0 - abs(45.0 - abs(rel.deviation_deg))
     sigma = angle_sigma_deg(scene.object(rel.argument), scene.object(rel.referent), scene)
     if sigma <= 1e-9:
         return 10.0
