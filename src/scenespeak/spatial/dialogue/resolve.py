@@ -132,9 +132,7 @@ def resolve(phrase: str, scene: DialogueScene) -> Reference:
         return found
     m = _POSITION.match(text)
     if m:
-        where = {"centre": "middle", "center": "middle"}.get(
-            m.group("where"), m.group("where")
-        )
+        where = {"centre": "middle", "center": "middle"}.get(m.group("where"), m.group("where"))
         found = _exact(f"{where} {m.group('noun')}", scene)
         if found is not None:
             return found
