@@ -258,7 +258,8 @@ class SceneDescription:
         ``objects`` (label, points, centroid, hull; extras: source, notes, plane_centroid,
         height_range), ``relations`` (argument, referent, primary, secondary, sentence, f0, f2;
         extras from :meth:`Relation.to_dict`), ``skipped`` (label, reason); extras ``summary``,
-        ``up``, ``stereo_points``, ``timings_ms``.
+        ``up``, ``camera`` (``focal_px``, ``baseline_m``: the depth error Z²·σ/(f·B) of the
+        dialogue's hedges), ``stereo_points``, ``timings_ms``.
         """
         objects = []
         for o in self.objects:
@@ -281,6 +282,7 @@ class SceneDescription:
             "skipped": [{"label": s.label, "reason": s.reason} for s in self.skipped],
             "summary": self.summary,
             "up": [float(v) for v in self.up],
+            "camera": _camera(self.rig),
             "stereo_points": len(self.point_labels),
             "timings_ms": {k: round(v * 1000.0, 2) for k, v in self.timings.items()},
         }
@@ -295,6 +297,14 @@ class SceneDescription:
         for s in self.skipped:
             lines.append(f"Not described: the {s.label} ({s.reason}).")
         return "\n".join(lines)
+
+
+def _camera(rig: Any) -> dict[str, float]:
+    """Focal length (px) and baseline (m) of the rig, for the depth error of a scene's words."""
+    try:
+        return {"focal_px": float(rig.K_left[0][0]), "baseline_m": float(rig.baseline)}
+    except (AttributeError, TypeError, IndexError):
+        return {}
 
 
 # --------------------------------------------------------------------------------------------

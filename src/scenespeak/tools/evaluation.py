@@ -101,6 +101,7 @@ class TruthRelation:
     referent: str
     primary: str
     ambiguous: bool = False
+    tags: tuple[str, ...] = ()  # centroid_rule.TAGS: "elongated", "close", "partly hidden"
 
 
 @dataclass(frozen=True)
@@ -135,6 +136,8 @@ class PredictedScene:
     relations: Mapping[tuple[str, str], str]
     seconds: float = 0.0
     error: str | None = None
+    #: ``(argument, referent) -> primary`` by the centroid-vector rule (``centroid_rule``).
+    centroid_relations: Mapping[tuple[str, str], str] = field(default_factory=dict)
 
 
 def _vec3(value: Any, where: str) -> tuple[float, float, float]:
@@ -166,12 +169,14 @@ def load_scene_truth(scene_dir: str | PathLike[str]) -> SceneTruth:
             TruthObject(str(o["label"]), _vec3(o["centroid"], f"{path}: {o['label']}"))
             for o in data["objects"]
         )
+        by_label = {str(o["label"]): o for o in data["objects"]}
         relations = tuple(
             TruthRelation(
                 str(r["argument"]),
                 str(r["referent"]),
                 str(r["primary"]),
                 bool(r.get("ambiguous", False)),
+                _tags(by_label, r),
             )
             for r in data.get("relations", [])
         )
@@ -180,14 +185,29 @@ def load_scene_truth(scene_dir: str | PathLike[str]) -> SceneTruth:
     return SceneTruth(Path(scene_dir).name, objects, relations)
 
 
+def _tags(objects: Mapping[str, Any], rel: Mapping[str, Any]) -> tuple[str, ...]:
+    from scenespeak.tools.centroid_rule import pair_tags
+
+    a, b = objects.get(str(rel["argument"])), objects.get(str(rel["referent"]))
+    return () if a is None or b is None else pair_tags(a, b, rel.get("reasons", ()))
+
+
 def predicted_from_description(description: Any, name: str, seconds: float = 0.0) -> PredictedScene:
     """Reduce a :class:`~scenespeak.pipeline.SceneDescription` (or its ``to_dict()``)."""
+    from scenespeak.tools.centroid_rule import centroid_primary
+
     d = description if isinstance(description, Mapping) else description.to_dict()
     objects = {str(o["label"]): _vec3(o["centroid"], str(o["label"])) for o in d["objects"]}
     relations = {
         (str(r["argument"]), str(r["referent"])): str(r["primary"]) for r in d["relations"]
     }
-    return PredictedScene(name, objects, relations, seconds)
+    centre = {str(o["label"]): o.get("plane_centroid") for o in d["objects"]}
+    by_centroid = {
+        key: centroid_primary(centre[key[0]], centre[key[1]])
+        for key in relations
+        if centre.get(key[0]) is not None and centre.get(key[1]) is not None
+    }
+    return PredictedScene(name, objects, relations, seconds, centroid_relations=by_centroid)
 
 
 # --------------------------------------------------------------------------------------------
@@ -240,6 +260,33 @@ class SceneScore:
     error: str | None = None
     labels: tuple[str, ...] = ()
     missing: tuple[str, ...] = ()
+    #: The centroid-vector rule on the same pairs: clear right, ambiguous right, and per tag
+    #: of ``centroid_rule.TAGS`` ``[forces right, centroid rule right, pairs]`` (clear pairs).
+    centroid_clear_correct: int = 0
+    centroid_ambiguous_correct: int = 0
+    by_tag: Mapping[str, list[int]] = field(default_factory=dict)
+
+
+def _centroid_scores(
+    pred: PredictedScene, truth: SceneTruth
+) -> tuple[int, int, dict[str, list[int]]]:
+    clear = ambiguous = 0
+    by_tag: dict[str, list[int]] = {}
+    for rel in truth.relations:
+        key = (rel.argument, rel.referent)
+        if key not in pred.relations or key not in pred.centroid_relations:
+            continue
+        right = int(pred.centroid_relations[key] == rel.primary)
+        if rel.ambiguous:
+            ambiguous += right
+            continue
+        clear += right
+        for tag in (*rel.tags, "all"):
+            t = by_tag.setdefault(tag, [0, 0, 0])
+            t[0] += int(pred.relations[key] == rel.primary)
+            t[1] += right
+            t[2] += 1
+    return clear, ambiguous, by_tag
 
 
 def score_scene(pred: PredictedScene, truth: SceneTruth) -> SceneScore:
@@ -273,6 +320,7 @@ def score_scene(pred: PredictedScene, truth: SceneTruth) -> SceneScore:
         tally[1] += 1
         tally[0] += int(pred.relations[key] == rel.primary)
     usable = pred.error is None and len(found) == len(labels) and len(described) == len(pairs)
+    cen_clear, cen_ambiguous, by_tag = _centroid_scores(pred, truth)
     return SceneScore(
         name=truth.name,
         usable=usable,
@@ -290,6 +338,9 @@ def score_scene(pred: PredictedScene, truth: SceneTruth) -> SceneScore:
         error=pred.error,
         labels=tuple(labels),
         missing=tuple(lab for lab in labels if lab not in pred.objects),
+        centroid_clear_correct=cen_clear,
+        centroid_ambiguous_correct=cen_ambiguous,
+        by_tag=by_tag,
     )
 
 
@@ -373,6 +424,23 @@ class EvaluationResult:
         """Per-scene times of the scenes that ran (failed ones included)."""
         return tuple(s.seconds for s in self.scenes)
 
+    def centroid_rule(self) -> dict[str, Any]:
+        """The centroid-vector rule beside the forces: clear and ambiguous pairs right, and
+        per tag (``elongated``, ``close``, ``partly hidden``, ``all``; clear pairs)
+        ``{"forces", "centroid", "pairs"}``."""
+        tags: dict[str, list[int]] = {}
+        for s in self.scenes:
+            for tag, (f, c, n) in s.by_tag.items():
+                t = tags.setdefault(tag, [0, 0, 0])
+                t[0], t[1], t[2] = t[0] + f, t[1] + c, t[2] + n
+        return {
+            "clear_correct": sum(s.centroid_clear_correct for s in self.scenes),
+            "ambiguous_correct": sum(s.centroid_ambiguous_correct for s in self.scenes),
+            "by_tag": {
+                k: {"forces": f, "centroid": c, "pairs": n} for k, (f, c, n) in tags.items()
+            },
+        }
+
     @classmethod
     def from_dict(cls, data: Mapping[str, Any]) -> EvaluationResult:
         """Rebuild a result from :meth:`to_dict`'s output (e.g. a saved ``--json`` file).
@@ -444,6 +512,7 @@ class EvaluationResult:
             },
             "seconds_per_scene": {"median": stat(secs, np.median), "mean": stat(secs, np.mean)},
             "paper": dict(PAPER),
+            "centroid_rule": self.centroid_rule(),
             "per_scene": [
                 {
                     **asdict(s),
@@ -502,6 +571,10 @@ def format_table(result: EvaluationResult) -> str:
         ("centroid error, median / mean", cent, "–"),
         ("time per scene, median / mean", secs, "–"),
         ("scenes that failed outright", str(result.n_failed), "–"),
+        ("centroid-vector rule instead: clear pairs",
+         _frac(d["centroid_rule"]["clear_correct"], ct), "–"),
+        ("centroid-vector rule instead: ambiguous pairs",
+         _frac(d["centroid_rule"]["ambiguous_correct"], at), "–"),
     ]  # fmt: skip
     head = (
         f"scenespeak evaluate {result.dataset or '(scenes)'}: {result.n_scenes} scenes, "
@@ -509,6 +582,17 @@ def format_table(result: EvaluationResult) -> str:
     )
     lines = [head, "", "| measure | scenespeak | paper (Luke et al. 2005) |", "| --- | --- | --- |"]
     lines += [f"| {a} | {b} | {c} |" for a, b, c in rows]
+    tags = d["centroid_rule"]["by_tag"]
+    if tags:
+        lines += ["", "| clear pairs | pairs | forces right | centroid rule right |",
+                  "| --- | --- | --- | --- |"]  # fmt: skip
+        for tag in ("elongated", "close", "partly hidden", "all"):
+            if tag in tags:
+                t = tags[tag]
+                lines.append(
+                    f"| {tag} | {t['pairs']} | {_frac(t['forces'], t['pairs'])} | "
+                    f"{_frac(t['centroid'], t['pairs'])} |"
+                )
     found: dict[str, list[int]] = {}
     for s in result.scenes:
         for lab in s.labels:
