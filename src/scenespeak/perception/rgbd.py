@@ -98,7 +98,8 @@ class RGBDOptions:
     plane_threshold : float
         Support-plane inlier distance at 1 m (metres; grows with ``Z^2``, at least this).
     plane_clearance : float
-        Box and outline pixels at most this high above the support plane are the plane.
+        Box and outline pixels at most this high above the support plane (or 2.5 times the
+        plane's spread, if more) are the plane.
     plane_iterations : int
         RANSAC hypotheses.
     plane_min_fraction : float
@@ -164,13 +165,15 @@ class SupportPlane:
     """The dominant support plane: ``normal . X = offset`` (camera frame, metres).
 
     ``normal`` is unit length and points to the camera's side (it is the world's up);
-    ``inliers`` of ``samples`` sampled pixels lie on it.
+    ``inliers`` of ``samples`` sampled pixels lie on it; ``spread`` is the robust standard
+    deviation of their distances to it (1.4826 × MAD, metres).
     """
 
     normal: tuple[float, float, float]
     offset: float
     inliers: int
     samples: int
+    spread: float = 0.0
 
     def height(self, xyz: NDArray[np.float64]) -> NDArray[np.float64]:
         """Height of points above the plane (metres, along the normal)."""
@@ -303,7 +306,8 @@ def measure_object(
     if n_pix - len(z):
         notes.append(f"{n_pix - len(z)} of {n_pix} pixels without depth")
     if plane is not None and len(z):
-        off = plane.height(backproject(xs, ys, z, cam)) > o.plane_clearance
+        clearance = max(o.plane_clearance, 2.5 * plane.spread)
+        off = plane.height(backproject(xs, ys, z, cam)) > clearance
         if (~off).any():
             notes.append(f"{int((~off).sum())} pixels on the support plane dropped")
         ys, xs, z = ys[off], xs[off], z[off]
@@ -485,8 +489,11 @@ def estimate_support_plane(
     scores = np.count_nonzero(resid <= tol[score_idx, None], axis=0)
     best = int(np.argmax(scores))
     normal, offset = n[best], float(d[best])
-    for _ in range(2):  # least-squares refinement on the inliers of the whole sample
-        inl = np.abs(p @ normal - offset) <= tol
+    inl = np.abs(p @ normal - offset) <= tol
+    spread = 0.0
+    for _ in range(3):
+        # least squares (SVD) on the inliers, then the inliers again within 3 robust sigmas
+        # of the fit (the hypothesis tolerance also takes in a wall's foot at a few metres)
         if inl.sum() < 3:
             return None
         q = p[inl]
@@ -494,10 +501,15 @@ def estimate_support_plane(
         _, _, vt = np.linalg.svd(q - centre, full_matrices=False)
         normal = vt[2] * (1.0 if vt[2] @ centre <= 0 else -1.0)
         offset = float(normal @ centre)
-    inliers = int(np.count_nonzero(np.abs(p @ normal - offset) <= tol))
+        resid = np.abs(p @ normal - offset)
+        spread = 1.4826 * float(np.median(resid[inl]))
+        inl = resid <= np.minimum(tol, max(0.004, 3.0 * spread))
+    inliers = int(np.count_nonzero(inl))
     if inliers < max(50, o.plane_min_fraction * len(p)) or normal @ hint < np.cos(
         np.radians(o.max_tilt_deg)
     ):
         return None
     nrm = normal + 0.0
-    return SupportPlane((float(nrm[0]), float(nrm[1]), float(nrm[2])), offset, inliers, len(p))
+    return SupportPlane(
+        (float(nrm[0]), float(nrm[1]), float(nrm[2])), offset, inliers, len(p), spread
+    )
