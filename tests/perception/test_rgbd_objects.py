@@ -145,7 +145,7 @@ def test_two_instances_named_apart_in_sentences_and_json() -> None:
 
 
 def test_image_plane_relations() -> None:
-    depth, inst, labels = rs.render()
+    _, inst, labels = rs.render()
     d = describe_image_plane(inst, labels)
     js = d.to_dict()
     assert js["frame"] == "image" and js["up"] is None

@@ -75,7 +75,8 @@ def test_intrinsics_three_forms(tmp_path: Path) -> None:
     )
     (tmp_path / "cv.yaml").write_text(
         "%YAML:1.0\n---\nimage_width: 640\nimage_height: 480\ncamera_matrix: !!opencv-matrix\n"
-        "   rows: 3\n   cols: 3\n   dt: d\n   data: [ 600., 0., 320., 0., 601., 240., 0., 0., 1. ]\n"
+        "   rows: 3\n   cols: 3\n   dt: d\n"
+        "   data: [ 600., 0., 320., 0., 601., 240., 0., 0., 1. ]\n"
     )
     for name in ("a.json", "ros.yaml", "cv.yaml"):
         cam = load_intrinsics(tmp_path / name)
