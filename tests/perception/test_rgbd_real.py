@@ -74,14 +74,14 @@ def test_relations_name_the_direction_of_the_positions(views) -> None:
             v = pose[:3, :3].T @ (mean[rel.argument] - mean[rel.referent])
             x, y = project_to_plane(v[None], desc.up)[0]
             angle = np.degrees(np.arctan2(y, x)) % 360
-            if abs(((angle - 45) % 90) - 45) < 25:  # within 20 deg of a diagonal: not clear
+            if abs(((angle - 45) % 90) - 45) > 25:  # within 20 deg of a diagonal: not clear
                 continue
             truth = NAMES[int(np.round(angle / 90)) % 4]
             words = {rel.primary} if rel.kind != "compound" else {rel.primary, rel.secondary}
             assert truth in words, (rel.sentence, truth, angle)
             said.setdefault((rel.argument, rel.referent), []).append({truth} & words)
             checked += 1
-    assert checked >= 10  # of 24 ordered pairs, 10 are clear (>= 20 deg from a diagonal)
+    assert checked >= 12  # of 24 ordered pairs, 14 are clear (>= 20 deg from a diagonal)
     # where both views see a pair clearly in the same direction, both say it
     both = [s for s in said.values() if len(s) == 2 and s[0] == s[1]]
-    assert len(both) >= 2
+    assert len(both) >= 4
