@@ -243,7 +243,7 @@ def _in_frame(rel: Any, frame: str) -> Any:
     """The image plane's words for a relation computed on image-plane hulls."""
     if frame != "image":
         return rel
-    from scenespeak.spatial.picture import in_picture
+    from scenespeak.spatial.language.picture import in_picture
 
     return in_picture(rel)
 
