@@ -200,6 +200,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     ap.add_argument("datasets", nargs="+", type=Path)
     ap.add_argument("--forms", nargs="+", default=list(FORMS), choices=FORMS)
     ap.add_argument("--out", type=Path, default=None, help="write per-scene results as JSON")
+    ap.add_argument("--limit", type=int, default=None, help="only the first N scenes of each")
     args = ap.parse_args(argv)
     from scenespeak.pipeline import database_from_dataset
     from scenespeak.tools.scenes import load_dataset
@@ -213,10 +214,11 @@ def main(argv: Sequence[str] | None = None) -> int:
             if {"db", "stereo"} & set(args.forms):
                 db = tmp / f"{root.name}.db"
                 database_from_dataset(root, db)
-            for k, scene in enumerate(ds.scenes):
+            scenes = ds.scenes[: args.limit] if args.limit is not None else ds.scenes
+            for k, scene in enumerate(scenes):
                 for form in args.forms:
                     results.append(evaluate_scene(scene, form, db, tmp))
-                sys.stderr.write(f"\r{root.name}: {k + 1}/{len(ds.scenes)} scenes")
+                sys.stderr.write(f"\r{root.name}: {k + 1}/{len(scenes)} scenes")
             sys.stderr.write("\n")
     summary = summarise(results)
     if args.out is not None:
