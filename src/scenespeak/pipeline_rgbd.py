@@ -436,23 +436,7 @@ def describe_rgbd(
             ys, xs = _mask_pixels(inst, k)
             measured.append(measure_object(label, label, ys, xs, d, intrinsics, vec, options=o))
     elif boxes is not None:
-        for box in boxes:
-            ys, xs = _box_pixels(box, size)
-            measured.append(
-                measure_object(
-                    box.label,
-                    box.label,
-                    ys,
-                    xs,
-                    d,
-                    intrinsics,
-                    vec,
-                    surface="nearest",
-                    plane=plane,
-                    source="box",
-                    options=o,
-                )
-            )
+        measured.extend(_box_objects(boxes, d, intrinsics, vec, plane, o))
     elif db is not None:
         if color is None:
             raise InputError("color", "the object database needs the colour image")
@@ -461,6 +445,64 @@ def describe_rgbd(
         raise InputError(None, "give masks, boxes or an object database with the depth image")
     timings["objects"] = time.perf_counter() - t0
     return _finish("horizontal", measured, resolved, timings, src, directions, summary)
+
+
+def _box_objects(
+    boxes: Sequence[Box],
+    depth: NDArray[np.float32],
+    cam: Intrinsics,
+    up: NDArray[np.float64],
+    plane: SupportPlane | None,
+    o: RGBDOptions,
+) -> list[MeasuredObject | Skipped]:
+    """Each box's nearest coherent surface, nearer objects first.
+
+    A box of an object partly hidden by a nearer one also holds the nearer object's pixels;
+    they belong to the nearer object. Each box is measured alone first; then, from the nearest
+    object to the farthest, each box is measured again without the pixels kept by the nearer
+    boxes (as a recognised outline is cut by the outlines of nearer objects).
+    """
+    size = (depth.shape[1], depth.shape[0])
+    pixels = [_box_pixels(box, size) for box in boxes]
+
+    def measure(k: int, ys: NDArray[np.intp], xs: NDArray[np.intp]) -> MeasuredObject | Skipped:
+        label = boxes[k].label
+        return measure_object(
+            label,
+            label,
+            ys,
+            xs,
+            depth,
+            cam,
+            up,
+            surface="nearest",
+            plane=plane,
+            source="box",
+            options=o,
+        )
+
+    first = [measure(k, ys, xs) for k, (ys, xs) in enumerate(pixels)]
+    dist = [
+        float(m.object.centroid[2])
+        if isinstance(m, MeasuredObject) and m.object.centroid is not None
+        else np.inf
+        for m in first
+    ]
+    claimed = np.zeros(depth.shape, dtype=bool).ravel()
+    out: list[MeasuredObject | Skipped] = list(first)
+    for k in np.argsort(dist, kind="stable").tolist():
+        ys, xs = pixels[k]
+        flat = ys * size[0] + xs
+        free = ~claimed[flat]
+        m = first[k] if free.all() else measure(k, ys[free], xs[free])
+        if isinstance(m, MeasuredObject):
+            if not free.all():
+                note = f"{int((~free).sum())} pixels of nearer objects left to them"
+                m = replace(m, pixels=len(ys), notes=(*m.notes, note))
+            if m.kept is not None:
+                claimed[m.kept] = True
+        out[k] = m
+    return out
 
 
 def _database_objects(

@@ -84,4 +84,4 @@ def test_relations_name_the_direction_of_the_positions(views) -> None:
     assert checked >= 12  # of 24 ordered pairs, 14 are clear (>= 20 deg from a diagonal)
     # where both views see a pair clearly in the same direction, both say it
     both = [s for s in said.values() if len(s) == 2 and s[0] == s[1]]
-    assert len(both) >= 4
+    assert len(both) >= 2

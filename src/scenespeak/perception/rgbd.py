@@ -139,6 +139,9 @@ class MeasuredObject:
         Pixels kept as the object's own surface (with depth); ``pixels`` in the image plane.
     notes : tuple of str
         What was done that a reader should know.
+    kept : (K,) intp or None
+        The kept pixels as flat indexes ``row * width + column`` of the depth image, when
+        known (so that a farther box can leave them to the nearer object).
     """
 
     object: SpatialObject
@@ -146,6 +149,7 @@ class MeasuredObject:
     pixels: int
     kept_pixels: int
     notes: tuple[str, ...] = field(default_factory=tuple)
+    kept: NDArray[np.intp] | None = None
 
     @property
     def name(self) -> str:
@@ -203,8 +207,12 @@ def surface_modes(
 ) -> list[tuple[float, float, int]]:
     """The dense depth intervals of a pixel set: ``(near, far, pixels)`` per mode, nearest first.
 
-    Bins are ``bin_width * mean(Z)^2`` wide (at least 2 mm); a mode is a maximal run of bins
-    each holding at least ``max(2, mode_fraction * len(z))`` pixels.
+    Bins are ``bin_width * mean(Z)^2`` wide (at least 2 mm). A mode is a maximal run of bins
+    each holding at least a tenth of ``t = max(2, mode_fraction * len(z))`` pixels (and at
+    least 2) that contains a bin of at least ``t`` (hysteresis, as Canny's edge thresholds): a
+    surface receding from the camera (a box's top seen at a grazing angle) thins out but never
+    breaks, while flying pixels strewn between an object and its background are too sparse
+    to join.
 
     Examples
     --------
@@ -222,15 +230,19 @@ def surface_modes(
     nb = int((float(zz.max()) - lo) / width) + 1
     idx = ((zz - lo) / width).astype(np.intp)
     counts = np.bincount(idx, minlength=nb)
-    dense = counts >= max(2, mode_fraction * len(zz))
-    if not dense.any():
-        dense = counts == counts.max()
-    edges = np.flatnonzero(np.diff(np.r_[0, dense.astype(np.int8), 0]))
+    high = max(2.0, mode_fraction * len(zz))
+    core = counts >= high
+    if not core.any():
+        core = counts == counts.max()
+    weak = (counts >= max(2.0, 0.1 * high)) | core
+    edges = np.flatnonzero(np.diff(np.r_[0, weak.astype(np.int8), 0]))
     starts, stops = edges[::2], edges[1::2]
+    ccore = np.r_[0, np.cumsum(core)]
     csum = np.r_[0, np.cumsum(counts)]
     return [
         (lo + a * width, lo + b * width, int(csum[b] - csum[a]))
         for a, b in zip(starts.tolist(), stops.tolist(), strict=True)
+        if ccore[b] > ccore[a]
     ]
 
 
@@ -331,6 +343,7 @@ def measure_object(
         pixels=n_pix,
         kept_pixels=len(xyz),
         notes=tuple(notes),
+        kept=ys.astype(np.intp) * depth.shape[1] + xs,
     )
 
 
