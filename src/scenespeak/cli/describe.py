@@ -15,9 +15,7 @@ from typing import Annotated, Any
 import typer
 
 from scenespeak.cli._app import (
-    CalibOpt,
     CalibRightOpt,
-    DbOpt,
     QuietOpt,
     TextOrJson,
     _echo,
@@ -32,11 +30,69 @@ OUTPUT_OPTIONS = frozenset({"fmt", "figures", "summary", "viewer", "about", "qui
 
 @app.command("describe")
 def describe_cmd(
-    left: Annotated[Path, typer.Argument(help="Left image.")],
-    right: Annotated[Path, typer.Argument(help="Right image.")],
-    db: DbOpt,
-    calib: CalibOpt,
+    images: Annotated[
+        list[Path],
+        typer.Argument(
+            help="LEFT RIGHT (a stereo pair, with --calib), or one COLOR image (with --depth "
+            "and --intrinsics, or with --masks/--boxes alone for the image plane)."
+        ),
+    ],
+    db: Annotated[
+        Path | None, typer.Option("--db", help="The object database (SQLite file).")
+    ] = None,
+    calib: Annotated[
+        Path | None,
+        typer.Option(
+            "--calib",
+            help="Calibration of a stereo pair: JSON (short or full form), OpenCV FileStorage "
+            "YAML, or the LEFT camera_info YAML of a ROS pair (then give --calib-right).",
+        ),
+    ] = None,
     calib_right: CalibRightOpt = None,
+    depth: Annotated[
+        Path | None,
+        typer.Option(
+            "--depth",
+            help="Depth registered to COLOR: 16-bit PNG (units of --depth-scale metres), float "
+            "TIFF or .npy in metres; 0, NaN, inf = no depth.",
+        ),
+    ] = None,
+    depth_scale: Annotated[
+        float, typer.Option("--depth-scale", help="Metres per unit of an integer depth image.")
+    ] = 0.001,
+    intrinsics: Annotated[
+        Path | None,
+        typer.Option(
+            "--intrinsics",
+            help='COLOR\'s camera: JSON {"fx","fy","cx","cy","width","height","up"?}, ROS '
+            "camera_info YAML or OpenCV YAML.",
+        ),
+    ] = None,
+    masks: Annotated[
+        Path | None,
+        typer.Option(
+            "--masks", help="Instance image (PNG 8/16-bit, 0 = background, k = instance k)."
+        ),
+    ] = None,
+    labels: Annotated[
+        Path | None,
+        typer.Option("--labels", help='Labels of the instances: JSON {"1": "mug", "2": "can"}.'),
+    ] = None,
+    boxes: Annotated[
+        Path | None,
+        typer.Option(
+            "--boxes", help='COCO detections: [{"bbox": [x, y, w, h], "label": ..., "score": ...}].'
+        ),
+    ] = None,
+    min_score: Annotated[
+        float, typer.Option("--min-score", help="Ignore boxes with a lower score.")
+    ] = 0.0,
+    estimate_up: Annotated[
+        bool,
+        typer.Option(
+            "--estimate-up", help="Estimate up from the support plane even if --intrinsics give it."
+        ),
+    ] = False,
     fmt: Annotated[TextOrJson, typer.Option("--format", help="text or json.")] = TextOrJson.text,
     figures: Annotated[
         Path | None, typer.Option("--figures", help="Also write a PNG of every stage here.")
@@ -67,14 +123,25 @@ def describe_cmd(
     ] = None,
     quiet: QuietOpt = False,
 ) -> None:
-    """Describe the spatial relations of the objects in a stereo pair."""
+    """Describe the spatial relations of the objects: a stereo pair, colour + depth, or masks."""
+    if figures is not None and (len(images) != 2 or db is None):
+        raise InputError(
+            "--figures", "the stage pictures are drawn for stereo pairs with --db only"
+        )
     with _status("describing the scene", quiet):
         description = describe_inputs(
-            left=left,
-            right=right,
+            images=images,
             db=db,
             calib=calib,
             calib_right=calib_right,
+            depth=depth,
+            depth_scale=depth_scale,
+            intrinsics=intrinsics,
+            masks=masks,
+            labels=labels,
+            boxes=boxes,
+            min_score=min_score,
+            estimate_up=estimate_up,
             dense=dense,
             unknown=unknown,
         )
@@ -92,44 +159,50 @@ def describe_inputs(**inputs: Any) -> Any:
     Parameters
     ----------
     **inputs
-        ``describe_cmd``'s parameters that are not in :data:`OUTPUT_OPTIONS` (``left``,
-        ``right``, ``db``, ``calib``, ``calib_right``, ``dense``, ``unknown``; None where
-        not given).
+        ``describe_cmd``'s parameters that are not in :data:`OUTPUT_OPTIONS` (``images``,
+        ``db``, ``calib``, ``depth``, ``masks`` …; None where not given).
 
     Returns
     -------
-    SceneDescription
+    SceneDescription or the RGB-D / image-plane description
 
     Raises
     ------
     InputError
-        When a required input is missing (``ask`` makes them all optional because of
-        ``--scene``).
+        When the inputs name no scene (``ask`` makes them all optional because of
+        ``--scene``) or an impossible combination.
     """
-    from scenespeak.pipeline import describe_files
+    from scenespeak.inputs import SceneInputs
+    from scenespeak.inputs import describe_inputs as describe
 
-    missing = [
-        flag
-        for flag, key in (
-            ("LEFT", "left"),
-            ("RIGHT", "right"),
-            ("--db", "db"),
-            ("--calib", "calib"),
-        )
-        if inputs.get(key) is None
-    ]
-    if missing:
+    images = list(inputs.get("images") or [])
+    if len(images) not in (1, 2):
         raise InputError(
-            "command line", f"give {', '.join(missing)} (or --scene FILE for a saved description)"
+            "IMAGES",
+            f"give LEFT RIGHT (a stereo pair) or one COLOR image, not {len(images)} "
+            "(or --scene FILE for a saved description)",
         )
-    return describe_files(
-        inputs["left"],
-        inputs["right"],
-        inputs["calib"],
-        inputs["db"],
+    scene_inputs = SceneInputs(
+        color=images[0],
+        right=images[1] if len(images) == 2 else None,
+        calib=inputs.get("calib"),
         calib_right=inputs.get("calib_right"),
-        dense=bool(inputs.get("dense", True)),
-        unknown=bool(inputs.get("unknown", True)),
+        depth=inputs.get("depth"),
+        depth_scale=float(inputs.get("depth_scale") or 0.001),
+        intrinsics=inputs.get("intrinsics"),
+        masks=inputs.get("masks"),
+        labels=inputs.get("labels"),
+        boxes=inputs.get("boxes"),
+        min_score=float(inputs.get("min_score") or 0.0),
+        db=inputs.get("db"),
+        estimate_up=bool(inputs.get("estimate_up")),
+    )
+    dense = inputs.get("dense")
+    unknown = inputs.get("unknown")
+    return describe(
+        scene_inputs,
+        dense=True if dense is None else bool(dense),
+        unknown=True if unknown is None else bool(unknown),
     )
 
 

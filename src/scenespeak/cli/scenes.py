@@ -29,26 +29,40 @@ def scenes_generate(
     pitched: Annotated[
         bool, typer.Option("--pitched", help="A rig pitched down instead of a level one.")
     ] = False,
+    depth_noise: Annotated[
+        bool,
+        typer.Option(
+            "--depth-noise",
+            help="Also write depth_noisy.png: the depth as a structured-light / stereo depth "
+            "camera gives it (Z^2 noise, quantisation, edge holes, flying pixels).",
+        ),
+    ] = False,
     quiet: QuietOpt = False,
 ) -> None:
-    """Render stereo scenes of textured objects with their ground truth."""
-    _generate(out, n, seed=seed, pitched=pitched, quiet=quiet)
+    """Render stereo scenes of textured objects with their ground truth (and RGB-D views)."""
+    _generate(out, n, seed=seed, pitched=pitched, quiet=quiet, depth_noise=depth_noise)
     _echo(f"wrote {n} scene(s) to {out}")
 
 
-def _generate(out: Path, n: int, *, seed: int, pitched: bool, quiet: bool) -> Any:
+def _generate(
+    out: Path, n: int, *, seed: int, pitched: bool, quiet: bool, depth_noise: bool = False
+) -> Any:
     from scenespeak.tools.scenes import generate_dataset
 
     progress = _progress(n, "rendering", quiet)
     if progress is None:
-        return generate_dataset(out, n, seed=seed, pitched=pitched, progress=None)
+        return generate_dataset(
+            out, n, seed=seed, pitched=pitched, progress=None, depth_noise=depth_noise
+        )
     with progress:
         task = progress.add_task("rendering", total=None)
 
         def advance(done: int, total: int) -> None:
             progress.update(task, completed=done, total=total)
 
-        return generate_dataset(out, n, seed=seed, pitched=pitched, progress=advance)
+        return generate_dataset(
+            out, n, seed=seed, pitched=pitched, progress=advance, depth_noise=depth_noise
+        )
 
 
 @app.command("demo")

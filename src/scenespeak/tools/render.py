@@ -15,7 +15,15 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["Camera", "MeshSpec", "render", "texture_image", "write_box_obj", "write_cylinder_obj"]
+__all__ = [
+    "Camera",
+    "MeshSpec",
+    "render",
+    "render_with_depth",
+    "texture_image",
+    "write_box_obj",
+    "write_cylinder_obj",
+]
 
 NEAR, FAR = 0.02, 60.0
 CYLINDER_SEGMENTS = 48
@@ -201,6 +209,19 @@ def render(
     Returns, per camera, the RGB image (area-averaged from ``supersample`` x the size) and the
     segmentation at render resolution (``k`` = index of ``meshes[k]``, -1 = floor/background).
     """
+    return [(rgb, seg) for rgb, seg, _ in render_with_depth(meshes, cameras, supersample)]
+
+
+def render_with_depth(
+    meshes: Sequence[MeshSpec],
+    cameras: Sequence[Camera],
+    supersample: int = 2,
+) -> list[tuple[NDArray[np.uint8], NDArray[np.int32], NDArray[np.float32]]]:
+    """:func:`render` plus each camera's depth at render resolution.
+
+    The depth is the camera-frame Z (metres) of the OpenGL depth buffer,
+    ``Z = far near / (far - (far - near) d)``; NaN where nothing was hit.
+    """
     import pybullet as p
 
     cid = p.connect(p.DIRECT)
@@ -264,7 +285,10 @@ def render(
                 seg = np.full(raw.shape, -1, np.int32)
                 for body, k in ids.items():
                     seg[raw == body] = k
-                out.append((np.round(rgb).astype(np.uint8), seg))
+                buf = np.reshape(np.asarray(res[3], np.float64), (h * s, w * s))
+                z = FAR * NEAR / (FAR - (FAR - NEAR) * buf)
+                z[buf >= 1.0 - 1e-7] = np.nan
+                out.append((np.round(rgb).astype(np.uint8), seg, z.astype(np.float32)))
             return out
     finally:
         p.disconnect(physicsClientId=cid)
@@ -280,3 +304,25 @@ def downsample_labels(seg: NDArray[np.int32], supersample: int, n: int) -> NDArr
         [(seg == k).reshape(h, s, w, s).sum(axis=(1, 3)) for k in range(-1, n)], axis=0
     )
     return np.argmax(counts, axis=0).astype(np.uint8)
+
+
+def downsample_depth(
+    seg: NDArray[np.int32], depth: NDArray[np.float32], supersample: int
+) -> NDArray[np.float32]:
+    """Render-resolution depth to final resolution: in each ``supersample`` x ``supersample``
+    block, the mean depth of the sub-pixels of the block's majority label (so an edge pixel
+    takes the depth of the surface it shows, never a mix); NaN where that surface has none."""
+    hs, ws = seg.shape
+    s = supersample
+    h, w = hs // s, ws // s
+    labels = seg.reshape(h, s, w, s).transpose(0, 2, 1, 3).reshape(h, w, s * s)
+    z = depth.reshape(h, s, w, s).transpose(0, 2, 1, 3).reshape(h, w, s * s)
+    ids = np.unique(labels)
+    counts = np.stack([(labels == k).sum(axis=2) for k in ids], axis=0)
+    major = ids[np.argmax(counts, axis=0)]
+    same = labels == major[:, :, None]
+    zs = np.where(same & np.isfinite(z), z, 0.0).sum(axis=2)
+    n = (same & np.isfinite(z)).sum(axis=2)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        out = np.where(n > 0, zs / np.maximum(n, 1), np.nan)
+    return out.astype(np.float32)

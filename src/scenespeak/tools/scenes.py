@@ -30,7 +30,15 @@ from numpy.typing import NDArray
 
 from scenespeak.errors import InputError
 from scenespeak.perception.calibration import ground_basis
-from scenespeak.tools.render import Camera, MeshSpec, cylinder_outline, downsample_labels, render
+from scenespeak.tools.render import (
+    Camera,
+    MeshSpec,
+    cylinder_outline,
+    downsample_depth,
+    downsample_labels,
+    render,
+    render_with_depth,
+)
 
 __all__ = [
     "CATALOGUE",
@@ -568,8 +576,15 @@ def generate_scene(
     stacked: bool = False,
     catalogue: Sequence[CatalogueObject] = CATALOGUE,
     layout: Sequence[Placement] | None = None,
+    depth_noise: bool = False,
 ) -> Path:
     """Render one scene into ``scene_dir`` (left/right images, calib, truth, labels).
+
+    Also the left camera's RGB-D view (``docs/rgbd.md``): ``depth.png`` (16-bit, millimetres,
+    0 = none), ``intrinsics.json``, ``labels.json`` for the instance image ``left_labels.png``,
+    each object's ``visible_centroid`` in ``truth.json``; with ``depth_noise`` also
+    ``depth_noisy.png``, the depth as a structured-light / stereo depth camera would give it
+    (:func:`scenespeak.tools.depthnoise.imitate_depth_camera`, seeded by the scene).
 
     A pure function of its arguments (safe in a process pool). The scene is written to a
     temporary sibling folder and renamed into place, so an interrupted call leaves nothing
@@ -589,10 +604,11 @@ def generate_scene(
         if layout is not None
         else sample_layout(seed, rig, catalogue=catalogue, n_objects=n_objects, stacked=stacked)
     )
-    (img_l, seg_l), (img_r, _) = render(
+    (img_l, seg_l, z_l), (img_r, _, _) = render_with_depth(
         [p.mesh() for p in placed], [rig.camera("left"), rig.camera("right")], SUPERSAMPLE
     )
     truth = _truth_dict(placed, rig, seg_l)
+    rgbd = _rgbd_files(placed, rig, seg_l, z_l, truth, seed if depth_noise else None)
     scene_dir.parent.mkdir(parents=True, exist_ok=True)
     tmp = Path(tempfile.mkdtemp(prefix=f".{scene_dir.name}-", dir=scene_dir.parent))
     try:
@@ -603,6 +619,11 @@ def generate_scene(
         )
         _dump(tmp / "calib.json", rig.calibration())
         _dump(tmp / "truth.json", truth)
+        for name, data in rgbd.items():
+            if isinstance(data, np.ndarray):
+                cv2.imwrite(str(tmp / name), data)
+            else:
+                _dump(tmp / name, data)
         # mkdtemp makes the folder private (0700); a scene is ordinary output, readable by all
         tmp.chmod(0o755)
         if scene_dir.exists():
@@ -612,6 +633,62 @@ def generate_scene(
         shutil.rmtree(tmp, ignore_errors=True)
         raise
     return scene_dir
+
+
+def _rgbd_files(
+    placed: Sequence[Placement],
+    rig: Rig,
+    seg: NDArray[np.int32],
+    z: NDArray[np.float32],
+    truth: dict[str, Any],
+    noise_seed: int | Sequence[int] | None,
+) -> dict[str, Any]:
+    """The left camera's RGB-D files; adds ``visible_centroid`` to ``truth``'s objects.
+
+    The visible centroid is the mean of the back-projected render-resolution pixels of each
+    object (the surface the camera sees), the target of the RGB-D path's centroids.
+    """
+    s = SUPERSAMPLE
+    k = rig.camera("left").intrinsics(s)
+    fx, fy, cx, cy = float(k[0, 0]), float(k[1, 1]), float(k[0, 2]), float(k[1, 2])
+    rows, cols = np.nonzero(seg >= 0)
+    zz = z[rows, cols].astype(np.float64)
+    u, v = (cols + 0.5) / s - 0.5, (rows + 0.5) / s - 0.5
+    xyz = np.column_stack([(u - cx) * zz / fx, (v - cy) * zz / fy, zz])
+    ids = seg[rows, cols]
+    for i, obj in enumerate(truth["objects"]):
+        sel = (ids == i) & np.isfinite(zz)
+        if sel.any():
+            obj["visible_centroid"] = [float(c) for c in xyz[sel].mean(axis=0)]
+    depth = downsample_depth(seg, z, s)
+    out: dict[str, Any] = {
+        "depth.png": _depth_mm(depth),
+        "intrinsics.json": {
+            "fx": fx,
+            "fy": fy,
+            "cx": cx,
+            "cy": cy,
+            "width": rig.image_size[0],
+            "height": rig.image_size[1],
+            "up": [round(float(c), 12) + 0.0 for c in rig.up],
+        },
+        "labels.json": {str(i + 1): p.obj.label for i, p in enumerate(placed)},
+    }
+    if noise_seed is not None:
+        from scenespeak.tools.depthnoise import imitate_depth_camera
+
+        seq = [int(noise_seed)] if isinstance(noise_seed, int) else [int(x) for x in noise_seed]
+        noisy = imitate_depth_camera(
+            depth, fx=fx, seed=int(np.random.SeedSequence(seq).generate_state(1)[0])
+        )
+        out["depth_noisy.png"] = _depth_mm(noisy)
+    return out
+
+
+def _depth_mm(depth: NDArray[np.float32]) -> NDArray[np.uint16]:
+    """Metres (NaN = none) to the 16-bit millimetre PNG convention (0 = none)."""
+    mm = np.where(np.isfinite(depth), np.round(depth * 1000.0), 0.0)
+    return np.clip(mm, 0, 65535).astype(np.uint16)
 
 
 def view_yaws(obj: CatalogueObject) -> tuple[float, ...]:
@@ -701,6 +778,7 @@ def generate_dataset(
     views: bool = True,
     overwrite: bool = False,
     progress: Callable[[int, int], Any] | None = None,
+    depth_noise: bool = False,
 ) -> Path:
     """Generate a dataset of ``n_scenes`` rendered stereo scenes with ground truth.
 
@@ -721,6 +799,8 @@ def generate_dataset(
         Replace a dataset made with other settings instead of refusing.
     progress : callable(done, total), optional
         Called after each object's views and each scene.
+    depth_noise : bool
+        Also write each scene's ``depth_noisy.png`` (see :func:`generate_scene`).
 
     Raises
     ------
@@ -742,6 +822,8 @@ def generate_dataset(
         "stacked": bool(stacked),
         "views": bool(views),
     }
+    if depth_noise:  # only when set, so that datasets made before the option still match
+        settings["depth_noise"] = True
     names = [f"scene_{i:03d}" for i in range(n_scenes)]
     meta = {
         "format": FORMAT,
@@ -799,6 +881,7 @@ def generate_dataset(
                 hfov_deg=hfov_deg,
                 baseline=baseline,
                 stacked=stacked,
+                depth_noise=depth_noise,
             )
         done += 1
         if progress is not None:
