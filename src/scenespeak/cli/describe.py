@@ -12,9 +12,14 @@ from scenespeak.cli._app import (
     CalibOpt,
     CalibRightOpt,
     DbOpt,
+    ImageSizeOpt,
+    PitchOpt,
     QuietOpt,
     TextOrJson,
+    UnitsOpt,
+    UpOpt,
     _echo,
+    _load_rig,
     _status,
     app,
 )
@@ -44,18 +49,42 @@ def describe_cmd(
             "--unknown/--no-unknown", help="Cluster unlabelled points into unknown objects."
         ),
     ] = True,
+    image_size: ImageSizeOpt = None,
+    units: UnitsOpt = "m",
+    up: UpOpt = None,
+    pitch: PitchOpt = None,
     quiet: QuietOpt = False,
 ) -> None:
     """Describe the spatial relations of the objects in a stereo pair."""
-    from scenespeak.pipeline import describe_files
-
+    rig = _load_rig(calib, calib_right, image_size=image_size, units=units, up=up, pitch=pitch)
     with _status("describing the scene", quiet):
-        description = describe_files(
-            left, right, calib, db, calib_right=calib_right, dense=dense, unknown=unknown
-        )
+        description = _describe(left, right, rig, db, dense=dense, unknown=unknown)
     if figures is not None:
         _write_figures(description, figures)
     _print_description(description, fmt)
+
+
+def _describe(left: Path, right: Path, rig: Any, db: Path, **options: Any) -> Any:
+    """The pipeline on files, with the plausibility checks of ``docs/trust.md``."""
+    import numpy as np
+
+    from scenespeak.perception import plausibility
+    from scenespeak.perception.database import ObjectDatabase
+    from scenespeak.perception.features import load_image
+    from scenespeak.pipeline import describe_scene
+
+    left_img = load_image(left, gray=False)
+    right_img = load_image(right, gray=False)
+    plausibility.check_pair_order(left_img, right_img, rig, names=(str(left), str(right)))
+    sources = {"left": str(left), "right": str(right), "calib": rig.source, "db": str(db)}
+    with ObjectDatabase.open(db, readonly=True) as database:
+        description = describe_scene(left_img, right_img, rig, database, sources=sources, **options)
+    z = np.array([o["centroid"][2] for o in description.to_dict()["objects"] if o.get("centroid")])
+    if len(z):
+        fx = float(rig.K_left[0, 0])
+        with np.errstate(divide="ignore"):
+            plausibility.check_depths(z, fx * rig.baseline / z, rig.source, min_points=1)
+    return description
 
 
 def _write_figures(description: Any, out_dir: Path) -> list[Path]:

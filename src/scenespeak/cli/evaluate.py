@@ -20,7 +20,9 @@ from scenespeak.cli._app import (
 def evaluate_cmd(
     dataset: Annotated[Path, typer.Argument(help="A generated dataset folder.")],
     as_json: Annotated[bool, typer.Option("--json", help="Print JSON.")] = False,
-    workers: Annotated[int, typer.Option("--workers", min=1, help="Processes.")] = 2,
+    workers: Annotated[
+        int, typer.Option("--workers", min=1, max=256, help="Processes (1 to 256).")
+    ] = 2,
     db: Annotated[
         Path | None, typer.Option("--db", help="Object database (default: learnt).")
     ] = None,
