@@ -189,4 +189,4 @@ def parse_assignments(items: Sequence[str], base: Limits | None = None) -> Limit
         if known[name].type in (int, "int") and number > 2**62:
             raise InputError("--limit", f"{name}: {text!r} is too large")
         changes[name] = int(number) if known[name].type in (int, "int") else number
-    return replace(base or current(), **changes)
+    return replace(base or current(), **changes)  # type: ignore[arg-type]

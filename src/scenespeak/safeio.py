@@ -555,7 +555,7 @@ def quiet_opencv() -> None:
     try:
         cv2.utils.logging.setLogLevel(cv2.utils.logging.LOG_LEVEL_SILENT)
     except AttributeError:  # pragma: no cover - very old OpenCV
-        cv2.setLogLevel(0)
+        getattr(cv2, "setLogLevel", lambda level: None)(0)
 
 
 def decode_image(

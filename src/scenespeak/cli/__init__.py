@@ -15,6 +15,7 @@ import os
 import sys
 import warnings
 from collections.abc import Sequence
+from typing import Any
 
 import click
 import typer
@@ -72,7 +73,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     return contextvars.copy_context().run(_run, command, args)
 
 
-def _run(command: click.Command, args: list[str]) -> int:
+def _run(command: Any, args: list[str]) -> int:
     # OpenCV reads this when it is first imported (by a command that needs it): its own log
     # lines ("[ WARN:0@...]") would be extra lines beside ours.
     os.environ.setdefault("OPENCV_LOG_LEVEL", "SILENT")

@@ -125,6 +125,7 @@ def _load_rig(
     units: str = "m",
     up: str | None = None,
     pitch: float | None = None,
+    swap: bool = False,
 ) -> Any:
     """Load a calibration (one file or a pair), apply --units/--up/--pitch, check plausibility."""
     from scenespeak.perception import calibfiles, plausibility
@@ -135,6 +136,8 @@ def _load_rig(
     else:
         rig = calibfiles.read_calibration(calib, image_size=size)
     rig = plausibility.with_units(rig, units)
+    if swap:
+        rig = plausibility.swapped(rig)
     if up is not None and pitch is not None:
         raise InputError("--up", "give --up or --pitch, not both")
     if up is not None:
@@ -221,6 +224,14 @@ UpOpt = Annotated[
 PitchOpt = Annotated[
     float | None,
     typer.Option("--pitch", help="The rig's downward pitch in degrees (sets --up)."),
+]
+SwapOpt = Annotated[
+    bool,
+    typer.Option(
+        "--swap",
+        help="The calibration's left camera is physically on the right: exchange the "
+        "cameras (calibration and images: give LEFT RIGHT as named).",
+    ),
 ]
 DbOpt = Annotated[Path, typer.Option("--db", help="The object database (SQLite file).")]
 QuietOpt = Annotated[bool, typer.Option("--quiet", "-q", help="No progress on stderr.")]

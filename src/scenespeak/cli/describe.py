@@ -15,6 +15,7 @@ from scenespeak.cli._app import (
     ImageSizeOpt,
     PitchOpt,
     QuietOpt,
+    SwapOpt,
     TextOrJson,
     UnitsOpt,
     UpOpt,
@@ -53,10 +54,15 @@ def describe_cmd(
     units: UnitsOpt = "m",
     up: UpOpt = None,
     pitch: PitchOpt = None,
+    swap: SwapOpt = False,
     quiet: QuietOpt = False,
 ) -> None:
     """Describe the spatial relations of the objects in a stereo pair."""
-    rig = _load_rig(calib, calib_right, image_size=image_size, units=units, up=up, pitch=pitch)
+    rig = _load_rig(
+        calib, calib_right, image_size=image_size, units=units, up=up, pitch=pitch, swap=swap
+    )
+    if swap:
+        left, right = right, left
     with _status("describing the scene", quiet):
         description = _describe(left, right, rig, db, dense=dense, unknown=unknown)
     if figures is not None:

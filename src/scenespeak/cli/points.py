@@ -15,6 +15,7 @@ from scenespeak.cli._app import (
     PitchOpt,
     PointsFormat,
     QuietOpt,
+    SwapOpt,
     UnitsOpt,
     UpOpt,
     _check_ratio,
@@ -45,13 +46,18 @@ def points_cmd(
     units: UnitsOpt = "m",
     up: UpOpt = None,
     pitch: PitchOpt = None,
+    swap: SwapOpt = False,
     quiet: QuietOpt = False,
 ) -> None:
     """Matched and triangulated keypoints of a stereo pair (before any labelling)."""
     from scenespeak.perception import plausibility, stereo
     from scenespeak.perception.features import load_image
 
-    rig = _load_rig(calib, calib_right, image_size=image_size, units=units, up=up, pitch=pitch)
+    rig = _load_rig(
+        calib, calib_right, image_size=image_size, units=units, up=up, pitch=pitch, swap=swap
+    )
+    if swap:
+        left, right = right, left
     left_img = load_image(left)
     right_img = load_image(right)
     with _status("matching the stereo pair", quiet):

@@ -45,7 +45,7 @@ class _Loader(yaml.SafeLoader):
 
 
 def _matrix(loader: yaml.SafeLoader, node: yaml.Node) -> dict[str, Any]:
-    return dict(loader.construct_mapping(node, deep=True))  # type: ignore[arg-type]
+    return dict(loader.construct_mapping(node, deep=True))
 
 
 for _tag in ("tag:yaml.org,2002:opencv-matrix", "tag:yaml.org,2002:opencv-nd-matrix"):
@@ -58,7 +58,11 @@ def _check_matrices(data: Any, source: Path) -> None:
         return
     for key, value in data.items():
         if isinstance(value, Mapping) and "data" in value:
-            rows, cols = value.get("rows", 1), value.get("cols", 1)
+            sizes = value.get("sizes")
+            if isinstance(sizes, list) and sizes:  # opencv-nd-matrix (OpenCV 5 writes 1-D so)
+                rows, cols = sizes[0], int(np.prod(sizes[1:])) if len(sizes) > 1 else 1
+            else:
+                rows, cols = value.get("rows", 1), value.get("cols", 1)
             if not all(isinstance(v, int) and not isinstance(v, bool) for v in (rows, cols)):
                 raise CalibrationError(source, f"{key}: rows and cols must be whole numbers")
             if rows < 1 or cols < 1 or rows * cols > _MAX_MATRIX:

@@ -45,6 +45,7 @@ __all__ = [
     "check_pair_order",
     "check_rig",
     "pitch_up",
+    "swapped",
     "with_units",
 ]
 
@@ -67,6 +68,32 @@ def with_units(rig: StereoRig, units: str) -> StereoRig:
     if key == "m":
         return rig
     return replace(rig, T=np.asarray(rig.T) * UNITS[key])
+
+
+def swapped(rig: StereoRig) -> StereoRig:
+    """The rig with its cameras exchanged (the right camera becomes the left one).
+
+    For a calibration whose "left" camera is physically on the right (``T[0] > 0``, e.g. a
+    stereo_calib run with the image names swapped): ``K``, ``dist`` exchanged,
+    ``R' = Rᵀ``, ``T' = −Rᵀ T``; give the images in the other order too (the CLI's ``--swap``
+    does both). ``up`` is turned into the new left camera's frame.
+
+    >>> from scenespeak.perception.calibration import rig_from_short
+    >>> swapped(rig_from_short(0.12, 60.0, (640, 480))).T.tolist()
+    [0.12, -0.0, -0.0]
+    """
+    R = np.asarray(rig.R)
+    T = np.asarray(rig.T)
+    return replace(
+        rig,
+        K_left=rig.K_right,
+        K_right=rig.K_left,
+        dist_left=rig.dist_right,
+        dist_right=rig.dist_left,
+        R=R.T,
+        T=-R.T @ T,
+        up=R @ np.asarray(rig.up),
+    )
 
 
 def pitch_up(pitch_deg: float) -> NDArray[np.float64]:
@@ -130,8 +157,8 @@ def check_rig(rig: StereoRig) -> StereoRig:
         raise CalibrationError(
             src,
             f"T[0] = {t[0]:g} > 0 says the right camera is to the LEFT of the left camera: the "
-            "cameras look swapped; swap the LEFT and RIGHT images (and the two calibration "
-            "files), or recalibrate with the left camera first",
+            "cameras look swapped (images named the wrong way round when calibrating?); pass "
+            "--swap to exchange both the images and the calibration's cameras",
         )
     return rig
 
@@ -200,8 +227,7 @@ def check_pair_order(
         raise CalibrationError(
             rig.source,
             f"{negative:.0%} of {len(lxy)} stereo matches have a negative disparity: {names[0]} "
-            f"and {names[1]} look swapped; give the left camera's image first (or swap the "
-            "calibration's cameras)",
+            f"and {names[1]} look swapped; give the left camera's image first",
         )
     return negative
 

@@ -97,7 +97,7 @@ def main(argv: list[str] | None = None) -> int:
 
     def progress(o: object) -> None:
         cls = getattr(o, "cls", "")
-        if cls in show or "all" in show:
+        if cls in show or "all" in show or ("all-bad" in show and cls != "clean"):
             print(f"{cls:15s} {getattr(o, 'id', '')}: {getattr(o, 'reason', '')}", flush=True)
 
     outcomes = run_cases(

@@ -108,13 +108,38 @@ def _histogram_cases(w: Writer) -> None:
                 expect=expect,
             )
         )
-    for value in (1e6, -1e6, 1e300, np.nan, np.inf, "2", None, 2 + 0j, [2.0], True):
+    r_values: tuple[object, ...] = (
+        1e6,
+        -1e6,
+        1e300,
+        np.nan,
+        np.inf,
+        "2",
+        None,
+        2 + 0j,
+        [2.0],
+        True,
+    )
+    for value in r_values:
         call = _call(forces, "force_histogram", SQ, RIGHT, r=value, directions=16)
         expect = "either" if isinstance(value, float) and np.isfinite(value) else "error"
         if isinstance(value, float) and abs(value) >= 1e6:
             call = _checked(call, _sane_histogram)
         w.add(Case(f"api/force_histogram/r={value!r}", "api", api=call, expect=expect))
-    for value in (2**40, 10**7, "180", 0, -1, 1.5, True, None, np.nan, 2**63, [180]):
+    directions_values: tuple[object, ...] = (
+        2**40,
+        10**7,
+        "180",
+        0,
+        -1,
+        1.5,
+        True,
+        None,
+        np.nan,
+        2**63,
+        [180],
+    )
+    for value in directions_values:
         for fn, args in (
             ("force_histogram", (SQ, RIGHT)),
             ("force_histograms", (SQ, RIGHT)),
@@ -240,7 +265,9 @@ def _all_zero_degrees(value: object) -> object:
     degrees = value.values() if isinstance(value, dict) else [value]
     for d in degrees:
         if getattr(d, "degree", 0.0) != 0.0:
-            raise WrongAnswer(f"a degree of {d.degree} from a histogram with no force")
+            raise WrongAnswer(
+                f"a degree of {getattr(d, 'degree', '?')} from a histogram with no force"
+            )
     return value
 
 
@@ -294,7 +321,8 @@ def _perception_cases(w: Writer, base: Base) -> None:
             ),
         )
     )
-    for value in (123, None, b"\xff\xfe.png", "", "\x00.png"):
+    names: tuple[object, ...] = (123, None, b"\xff\xfe.png", "", "\x00.png")
+    for value in names:
         w.add(Case(f"api/load_image/{value!r}", "api", api=_call(features, "load_image", value)))
     cal = "scenespeak.perception.calibration"
     shorts: dict[str, tuple[Any, ...]] = {
@@ -310,7 +338,13 @@ def _perception_cases(w: Writer, base: Base) -> None:
     }
     for name, args in shorts.items():
         w.add(Case(f"api/rig_from_short/{name}", "api", api=_call(cal, "rig_from_short", *args)))
-    for value in ({"K_left": np.eye(3) * 1j}, [], None, {"baseline": "0.12", "hfov_deg": 60}):
+    mappings: tuple[object, ...] = (
+        {"K_left": np.eye(3) * 1j},
+        [],
+        None,
+        {"baseline": "0.12", "hfov_deg": 60},
+    )
+    for value in mappings:
         w.add(
             Case(
                 f"api/rig_from_mapping/{str(value)[:20]}",
@@ -318,7 +352,8 @@ def _perception_cases(w: Writer, base: Base) -> None:
                 api=_call(cal, "rig_from_mapping", value),
             )
         )
-    for value in (123, None, "", str(base.calib) + "\x00"):
+    paths: tuple[object, ...] = (123, None, "", str(base.calib) + "\x00")
+    for value in paths:
         w.add(Case(f"api/load_rig/{value!r}", "api", api=_call(cal, "load_rig", value)))
     objects = "scenespeak.perception.objects"
     pts: dict[str, Any] = {

@@ -19,6 +19,7 @@ and :mod:`~scenespeak.tools.fuzz.apicases` (the Python API).
 
 from __future__ import annotations
 
+import functools
 import json
 import os
 import shutil
@@ -26,7 +27,7 @@ import sqlite3
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Literal
+from typing import Any, Literal
 
 import numpy as np
 from numpy.typing import NDArray
@@ -109,7 +110,8 @@ def photo(name: str, rows: int, cols: int) -> NDArray[np.uint8]:
 
     img = getattr(data, name)()
     img = np.stack([img] * 3, -1) if img.ndim == 2 else img[..., :3]
-    return cv2.resize(np.ascontiguousarray(img), (cols, rows), interpolation=cv2.INTER_AREA)
+    out = cv2.resize(np.ascontiguousarray(img), (cols, rows), interpolation=cv2.INTER_AREA)
+    return np.asarray(out, np.uint8)
 
 
 def card_pair(seed: int = 0) -> tuple[NDArray[np.uint8], NDArray[np.uint8]]:
@@ -133,14 +135,30 @@ def card_pair(seed: int = 0) -> tuple[NDArray[np.uint8], NDArray[np.uint8]]:
         card = photo(name, wpx, wpx)
         left[v : v + wpx, u : u + wpx] = card
         right[v : v + wpx, u - d : u - d + wpx] = card
-    return left, right
+    return np.asarray(left, np.uint8), np.asarray(right, np.uint8)
+
+
+def _photo_png(label: str) -> bytes:
+    return png_bytes(photo(label, 200, 200))
+
+
+def make_fifo(path: Path) -> None:
+    """A FIFO at ``path`` (kept if there)."""
+    if not path.exists():
+        os.mkfifo(path)
+
+
+def make_symlink(link: Path, target: Path | str) -> None:
+    """A symlink ``link`` → ``target`` (kept if there)."""
+    if not link.is_symlink():
+        link.symlink_to(target)
 
 
 def png_bytes(image: NDArray[np.generic], ext: str = ".png") -> bytes:
     """``image`` (RGB or gray) encoded by OpenCV."""
     import cv2
 
-    arr = image
+    arr: Any = np.asarray(image)
     if arr.ndim == 3 and arr.shape[2] == 3:
         arr = cv2.cvtColor(arr, cv2.COLOR_RGB2BGR)
     ok, buf = cv2.imencode(ext, arr)
@@ -214,7 +232,7 @@ def make_base(w: Writer) -> Base:
     right = w.bytes("base/right.png", right_b)
     cal = w.json("base/calib.json", calib)
     train = {
-        label: w.bytes(f"base/{label}.png", lambda label=label: png_bytes(photo(label, 200, 200)))
+        label: w.bytes(f"base/{label}.png", functools.partial(_photo_png, label))
         for label in LABELS
     }
     mask = w.bytes(

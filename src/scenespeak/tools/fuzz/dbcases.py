@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import os
 import sqlite3
 import time
@@ -18,6 +19,7 @@ from scenespeak.tools.fuzz.corpus import (
     Writer,
     db_labels,
     keeps_labels,
+    make_fifo,
 )
 
 _ROW_DAMAGE: dict[str, str] = {
@@ -116,7 +118,7 @@ def _file_kinds(w: Writer, base: Base) -> dict[str, Path]:
     w.do(lambda: folder.mkdir(exist_ok=True))
     out["folder.db"] = folder
     fifo = w.path("db/fifo.db")
-    w.do(lambda: fifo.exists() or os.mkfifo(fifo))
+    w.do(functools.partial(make_fifo, fifo))
     out["fifo.db"] = fifo
     out["dev-null"] = Path("/dev/null")
     out["dev-zero"] = Path("/dev/zero")
@@ -131,9 +133,9 @@ def databases(w: Writer, base: Base) -> None:
         name: (path, None) for name, path in _file_kinds(w, base).items()
     }
     for name, sql in _ROW_DAMAGE.items():
-        p = w.path(f"db/row-{name}.db")
-        w.do(_damage(base, p, sql))
-        targets[f"row-{name}"] = (p, None)
+        row_db = w.path(f"db/row-{name}.db")
+        w.do(_damage(base, row_db, sql))
+        targets[f"row-{name}"] = (row_db, None)
     either = {
         "row-added-garbage",
         "row-index-cache-poisoned",
@@ -146,7 +148,7 @@ def databases(w: Writer, base: Base) -> None:
         "row-orphan-view",
     }
     for name, (path, _) in targets.items():
-        p = str(path)
+        p: str = str(path)
         expect: Expect = "either" if name in either else "error"
         list_expect: Expect = expect
         if name.startswith("row-") and any(
@@ -210,7 +212,7 @@ def databases(w: Writer, base: Base) -> None:
                     ),
                     expect=expect,
                     names=str(copy),
-                    setup=lambda copy=copy, src=src: _copy(src, copy),
+                    setup=functools.partial(_copy, src, copy),
                 )
             )
             w.add(
@@ -220,7 +222,7 @@ def databases(w: Writer, base: Base) -> None:
                     ("db", "remove", "--db", str(copy), "coffee"),
                     expect=expect,
                     names=str(copy),
-                    setup=lambda copy=copy, src=src: _copy(src, copy),
+                    setup=functools.partial(_copy, src, copy),
                 )
             )
         elif name not in ("missing.db",):
@@ -316,7 +318,7 @@ def db_commands(w: Writer, base: Base) -> None:
                 ("db", "add", "--db", str(copy), f"--label={label}", img, "-q"),
                 expect=expect,
                 names="label" if name != "duplicate" else "astronaut",
-                setup=lambda copy=copy: base.copy_db(copy),
+                setup=functools.partial(base.copy_db, copy),
                 check=keeps_labels(copy, ("astronaut", "coffee")),
             )
         )

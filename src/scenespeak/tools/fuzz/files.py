@@ -3,9 +3,9 @@ stereo_calib pair), and datasets with their ``truth.json``."""
 
 from __future__ import annotations
 
+import functools
 import itertools
 import json
-import os
 import struct
 import zlib
 from collections.abc import Callable
@@ -25,6 +25,8 @@ from scenespeak.tools.fuzz.corpus import (
     Writer,
     card_pair,
     keeps_labels,
+    make_fifo,
+    make_symlink,
     png_bytes,
 )
 
@@ -79,11 +81,11 @@ def _image_variants(w: Writer, base: Base) -> list[tuple[str, Path, Expect]]:
     add("text.png", b"this is not an image\n")
     add("html.png", b"<html><body>404</body></html>")
     for k, size in enumerate((16, 1000, 50_000)):
-        add(f"random-{k}.png", lambda size=size: rng.bytes(size))
+        add(f"random-{k}.png", functools.partial(rng.bytes, size))
     add("signature-only.png", b"\x89PNG\r\n\x1a\n")
     add("header-only.png", lambda: png_header_only(W, H, idat=False))
     for frac in (0.05, 0.2, 0.4, 0.6, 0.8, 0.95, 0.999):
-        add(f"truncated-{int(frac * 1000)}.png", lambda frac=frac: good[: int(len(good) * frac)])
+        add(f"truncated-{int(frac * 1000)}.png", good[: int(len(good) * frac)])
     for k, offset in enumerate((20, 29, 40, 100, 1000, -20)):
 
         def flip(offset: int = offset) -> bytes:
@@ -132,13 +134,13 @@ def _image_variants(w: Writer, base: Base) -> list[tuple[str, Path, Expect]]:
     w.do(lambda: folder.mkdir(exist_ok=True))
     out.append(("folder.png", folder, "error"))
     fifo = w.path("images/fifo.png")
-    w.do(lambda: fifo.exists() or os.mkfifo(fifo))
+    w.do(functools.partial(make_fifo, fifo))
     out.append(("fifo.png", fifo, "error"))
     zero = w.path("images/zero.png")
-    w.do(lambda: zero.is_symlink() or zero.symlink_to("/dev/zero"))
+    w.do(functools.partial(make_symlink, zero, "/dev/zero"))
     out.append(("dev-zero.png", zero, "error"))
     loop = w.path("images/loop.png")
-    w.do(lambda: loop.is_symlink() or loop.symlink_to(loop))
+    w.do(functools.partial(make_symlink, loop, loop))
     out.append(("symlink-loop.png", loop, "error"))
     out.append(("missing.png", w.root / "images" / "no-such-file.png", "error"))
     out.append(("name-300-bytes.png", w.root / "images" / ("x" * 300 + ".png"), "error"))
@@ -192,7 +194,7 @@ def images(w: Writer, base: Base) -> None:
                 ("db", "add", "--db", str(copy), "--label", "new", p, q),
                 expect=add_expect,
                 names=p,
-                setup=lambda copy=copy: base.copy_db(copy),
+                setup=functools.partial(base.copy_db, copy),
                 check=keeps_labels(copy, ("astronaut", "coffee")),
             )
         )
@@ -214,7 +216,7 @@ def images(w: Writer, base: Base) -> None:
                 ),
                 expect="either" if name in ("white.png", "gray.png", "noise.png") else "error",
                 names=p,
-                setup=lambda copy=copy_mask: base.copy_db(copy),
+                setup=functools.partial(base.copy_db, copy_mask),
                 check=keeps_labels(copy_mask, ("astronaut", "coffee")),
             )
         )
@@ -257,7 +259,7 @@ def masks(w: Writer, base: Base) -> None:
                 ),
                 expect="either" if name in ("checker.png", "gray-127.png", "line.png") else "error",
                 names=str(p),
-                setup=lambda copy=copy: base.copy_db(copy),
+                setup=functools.partial(base.copy_db, copy),
                 check=keeps_labels(copy, ("astronaut", "coffee")),
             )
         )
@@ -419,8 +421,8 @@ def _json_calibs() -> dict[str, tuple[str, Expect, tuple[str, ...]]]:
             (),
         ),
     }
-    for name, (doc, expect, says) in semantics.items():
-        out[name] = (json.dumps(doc), expect, says)
+    for name, (mapping, expect, says) in semantics.items():
+        out[name] = (json.dumps(mapping), expect, says)
     return out
 
 
@@ -667,9 +669,9 @@ def calibrations(w: Writer, base: Base) -> None:
     folder_json = w.path("calib/folder.json")
     w.do(lambda: folder_json.mkdir(exist_ok=True))
     fifo = w.path("calib/fifo.yml")
-    w.do(lambda: fifo.exists() or os.mkfifo(fifo))
+    w.do(functools.partial(make_fifo, fifo))
     fifo_xml = w.path("calib/fifo.xml")
-    w.do(lambda: fifo_xml.exists() or os.mkfifo(fifo_xml))
+    w.do(functools.partial(make_fifo, fifo_xml))
     specials = {
         "over-16MB.json": big,
         "folder.xml": folder,
@@ -884,7 +886,7 @@ def datasets(w: Writer, base: Base) -> None:
         )
     link = w.path("dataset/idx-symlink-out")
     _copy_scene(w, src, link / "scene_000", base)
-    w.do(lambda: (link / "escape").is_symlink() or (link / "escape").symlink_to(outside))
+    w.do(functools.partial(make_symlink, link / "escape", outside))
     w.json("dataset/idx-symlink-out/dataset.json", {"scenes": ["escape"]})
     w.add(
         Case(
@@ -930,7 +932,7 @@ def datasets(w: Writer, base: Base) -> None:
         "empty-folder": w.path("dataset/empty-folder"),
     }.items():
         if name == "empty-folder":
-            w.do(lambda target=target: target.mkdir(parents=True, exist_ok=True))
+            w.do(functools.partial(target.mkdir, parents=True, exist_ok=True))
         w.add(
             Case(
                 f"dataset/{name}",

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from pathlib import Path
+from typing import cast
 
 from scenespeak.tools.fuzz.corpus import Base, Case, Checker, Expect, Writer
 
@@ -43,7 +44,7 @@ def options(w: Writer, base: Base) -> None:
                 f"option/points--ratio={value or 'empty'}",
                 "options",
                 (*points, f"--ratio={value}"),
-                expect=expect,
+                expect=cast(Expect, expect),
                 names="--ratio",
             )
         )
@@ -69,7 +70,7 @@ def options(w: Writer, base: Base) -> None:
                 f"option/points--out-{name}",
                 "options",
                 (*points, "--out", str(out)),
-                expect=expect,
+                expect=cast(Expect, expect),
                 names=str(out),
             )
         )
@@ -159,7 +160,7 @@ def options(w: Writer, base: Base) -> None:
                 f"option/scenes-generate--seed={value[:8]}",
                 "options",
                 ("scenes", "generate", str(out), "--seed", value, "-q"),
-                expect=expect,
+                expect=cast(Expect, expect),
                 names="--seed",
             )
         )
@@ -168,7 +169,7 @@ def options(w: Writer, base: Base) -> None:
                 f"option/demo--seed={value[:8]}",
                 "options",
                 ("demo", str(out), "--seed", value, "-q"),
-                expect=expect,
+                expect=cast(Expect, expect),
                 names="--seed",
             )
         )
@@ -301,13 +302,13 @@ def options(w: Writer, base: Base) -> None:
             )
         )
     for value in ("cm", "", "MM", "furlongs"):
-        expect: Expect = "either" if value in ("cm", "MM") else "error"
+        unit_expect: Expect = "either" if value in ("cm", "MM") else "error"
         w.add(
             Case(
                 f"option/points--units={value or 'empty'}",
                 "options",
                 (*points, "--units", value),
-                expect=expect,
+                expect=unit_expect,
                 names="--units",
             )
         )

@@ -126,7 +126,11 @@ def classify(
     if code == 0:
         if case.expect == "error":
             return "silently wrong", "accepted (exit 0) an input that must be refused"
-        noise = [ln for ln in err.splitlines() if ln.strip()]
+        noise = [
+            ln
+            for ln in err.splitlines()
+            if ln.strip() and not ln.startswith(("scenespeak: waiting", "scenespeak: warning"))
+        ]
         if noise and case.argv is not None:
             return "not one line", "succeeded but printed on stderr: " + noise[0][:120]
         return "clean", "accepted"
