@@ -68,6 +68,20 @@ class SpatialObject:
     confidence: float = 1.0
     mask: NDArray[np.bool_] | None = None
 
+    def __post_init__(self) -> None:
+        from scenespeak.errors import InputError
+
+        try:
+            hull = np.asarray(self.hull)
+        except (TypeError, ValueError) as exc:
+            raise InputError(self.name, f"hull cannot be read as vertices ({exc})") from None
+        if hull.dtype.kind not in "iuf" or hull.ndim != 2 or hull.shape[1:] != (2,):
+            raise InputError(
+                self.name, f"hull must be real (M, 2) vertices, got {hull.dtype} {hull.shape}"
+            )
+        if len(hull) < 3 or not np.isfinite(hull).all():
+            raise InputError(self.name, "hull needs at least 3 finite vertices")
+
     @property
     def footprint_centroid(self) -> NDArray[np.float64]:
         """The mean of the hull's vertices (a cheap "where" on the plane)."""

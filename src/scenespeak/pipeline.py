@@ -479,6 +479,25 @@ def _stereo_stage(
     return feats_r, result
 
 
+def _no_matches_error(src: Mapping[str, str], rig: Any, n_left: int, n_right: int) -> Exception:
+    """Name what is most likely wrong when a pair gives no stereo match: the image with no
+    texture, or (when both have plenty of keypoints) the calibration."""
+    from scenespeak.errors import CalibrationError
+
+    counts = f"{n_left} SIFT keypoints in the left image, {n_right} in the right"
+    if min(n_left, n_right) >= 50:
+        return CalibrationError(
+            src.get("calib", getattr(rig, "source", "calibration")),
+            f"no stereo matches ({counts}): the calibration does not seem to fit these images "
+            "(rectification, image size, or LEFT and RIGHT swapped)",
+        )
+    side = "left" if n_left <= n_right else "right"
+    return ImageError(
+        src.get(side, f"{side} image"),
+        f"no stereo matches ({counts}): the {side} image has too little texture to describe",
+    )
+
+
 def _after_stereo(
     left: NDArray[np.generic],
     right: NDArray[np.generic],
@@ -496,11 +515,7 @@ def _after_stereo(
     rig = result.rect.rig
     points = result.points
     if len(points.xyz) == 0:
-        raise ImageError(
-            lname,
-            f"no stereo matches ({len(feats_l)} SIFT keypoints in the left image, "
-            f"{len(feats_r)} in the right): the scene has too little texture to describe",
-        )
+        raise _no_matches_error(src, rig, len(feats_l), len(feats_r))
     kp_names = labelling.names()
     point_labels = tuple(kp_names[int(i)] for i in points.left_index)
 

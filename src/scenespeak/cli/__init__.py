@@ -10,9 +10,14 @@ below. A new command is a new module here plus one import line.
 
 from __future__ import annotations
 
+import contextvars
+import os
 import sys
+import warnings
 from collections.abc import Sequence
+from typing import Any
 
+import click
 import typer
 
 from scenespeak.cli import annotate, ask, db, describe, evaluate, points, scenes  # noqa: F401
@@ -21,9 +26,29 @@ from scenespeak.errors import ScenespeakError
 
 __all__ = ["app", "main"]
 
+# Typer >= 0.2x vendors its own copy of click; catch either's exceptions.
+_typer_click = getattr(typer, "_click", None)
+_CLICK_ERRORS: tuple[type[Exception], ...] = tuple(
+    {click.ClickException, getattr(_typer_click, "ClickException", click.ClickException)}
+)
+_EXITS: tuple[type[Exception], ...] = tuple({click.exceptions.Exit, typer.Exit})
+_ABORTS: tuple[type[BaseException], ...] = tuple({click.exceptions.Abort, typer.Abort})
+
 
 def _error_line(exc: BaseException) -> str:
-    return f"scenespeak: error: {exc}"
+    from scenespeak.cleantext import clean_text
+
+    return "scenespeak: error: " + clean_text(str(exc))
+
+
+def _usage_line(exc: Exception) -> str:
+    """A click/typer usage error as one line (not the multi-line usage box)."""
+    from scenespeak.cleantext import clean_text
+
+    message = str(getattr(exc, "format_message", exc.__str__)()).strip().rstrip(".")
+    ctx = getattr(exc, "ctx", None)
+    where = f" (see: {ctx.command_path} --help)" if ctx is not None else ""
+    return "scenespeak: error: " + clean_text(message) + where
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -41,14 +66,38 @@ def main(argv: Sequence[str] | None = None) -> int:
     """
     args = list(sys.argv[1:] if argv is None else argv)
     command = typer.main.get_command(app)
+    if not args:
+        args = ["--help"]
+    # Each run gets its own context (the --limit values) and records library warnings instead
+    # of letting them print as extra lines: every error stays one line of ours.
+    return contextvars.copy_context().run(_run, command, args)
+
+
+def _run(command: Any, args: list[str]) -> int:
+    # OpenCV reads this when it is first imported (by a command that needs it): its own log
+    # lines ("[ WARN:0@...]") would be extra lines beside ours.
+    os.environ.setdefault("OPENCV_LOG_LEVEL", "SILENT")
     try:
-        # Standalone mode: click/typer print usage errors themselves and raise SystemExit.
-        command.main(args=args, prog_name="scenespeak", standalone_mode=True)
+        with warnings.catch_warnings(record=True):
+            warnings.simplefilter("always")
+            result = command.main(args=args, prog_name="scenespeak", standalone_mode=False)
     except ScenespeakError as exc:
         sys.stderr.write(_error_line(exc) + "\n")
         return EXIT_INPUT
+    except _EXITS as exc:
+        return int(getattr(exc, "exit_code", 0) or 0)
+    except _ABORTS:
+        sys.stderr.write("scenespeak: error: interrupted\n")
+        return 130
+    except _CLICK_ERRORS as exc:
+        sys.stderr.write(_usage_line(exc) + "\n")
+        code = getattr(exc, "exit_code", EXIT_INPUT)
+        return EXIT_INPUT if code in (1, 2) else int(code)
     except BrokenPipeError:  # e.g. `scenespeak describe ... | head -1`
         return 0
+    except RecursionError:
+        sys.stderr.write("scenespeak: error: an input is nested too deeply to process\n")
+        return EXIT_INPUT
     except SystemExit as exc:
         code = exc.code
         if code is None:
@@ -57,4 +106,4 @@ def main(argv: Sequence[str] | None = None) -> int:
             return code
         sys.stderr.write(f"{code}\n")
         return 1
-    return 0
+    return result if isinstance(result, int) else 0

@@ -30,11 +30,16 @@ def db_add(
             help="A mask per image (white = object), in the same order; repeat the option.",
         ),
     ] = None,
+    replace: Annotated[
+        bool, typer.Option("--replace", help="Replace an object with the same label.")
+    ] = False,
     quiet: QuietOpt = False,
 ) -> None:
     """Learn an object from training images (a transaction: all or nothing)."""
+    from scenespeak.cleantext import check_label
     from scenespeak.perception.recognition import ObjectDatabase
 
+    check_label(label)
     masks = list(mask) if mask else None
     if masks is not None and len(masks) != len(images):
         raise InputError("--mask", f"{len(masks)} masks for {len(images)} images; give one each")
@@ -42,7 +47,7 @@ def db_add(
         _status(f"learning {label!r} from {len(images)} image(s)", quiet),
         ObjectDatabase.open(db, create=True) as database,
     ):
-        info = database.add_object(label, images, masks=masks)
+        info = database.add_object(label, images, masks=masks, replace=replace)
     _echo(f"added {info.label!r}: {info.views} view(s), {info.descriptors} descriptors")
 
 
@@ -70,13 +75,26 @@ def db_list(
 
 @db_app.command("remove")
 def db_remove(
-    labels: Annotated[list[str], typer.Argument(help="Labels to remove.")],
+    labels: Annotated[
+        list[str],
+        typer.Argument(
+            help="Labels to remove (all in one transaction). Put -- before a label that "
+            "starts with a dash: db remove --db objects.db -- --help"
+        ),
+    ],
     db: DbOpt,
 ) -> None:
-    """Remove objects from the database."""
+    """Remove objects from the database (all or none)."""
     from scenespeak.perception.recognition import ObjectDatabase
 
     with ObjectDatabase.open(db) as database:
-        for lab in labels:
-            database.remove(lab)
-    _echo("removed " + ", ".join(repr(lab) for lab in labels))
+        remove_many = getattr(database, "remove_many", None)
+        if remove_many is not None:
+            remove_many(labels)
+        else:
+            missing = [lab for lab in labels if lab not in database]
+            if missing:
+                raise InputError(db, f"no object labelled {missing[0]!r}; nothing was removed")
+            for lab in dict.fromkeys(labels):
+                database.remove(lab)
+    _echo("removed " + ", ".join(repr(lab) for lab in dict.fromkeys(labels)))

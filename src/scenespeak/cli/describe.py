@@ -16,9 +16,15 @@ import typer
 
 from scenespeak.cli._app import (
     CalibRightOpt,
+    ImageSizeOpt,
+    PitchOpt,
     QuietOpt,
+    SwapOpt,
     TextOrJson,
+    UnitsOpt,
+    UpOpt,
     _echo,
+    _load_rig,
     _status,
     app,
 )
@@ -121,6 +127,11 @@ def describe_cmd(
         str | None,
         typer.Option("--about", help="Only the relations whose argument is this object."),
     ] = None,
+    image_size: ImageSizeOpt = None,
+    units: UnitsOpt = "m",
+    up: UpOpt = None,
+    pitch: PitchOpt = None,
+    swap: SwapOpt = False,
     quiet: QuietOpt = False,
 ) -> None:
     """Describe the spatial relations of the objects: a stereo pair, colour + depth, or masks."""
@@ -144,6 +155,11 @@ def describe_cmd(
             estimate_up=estimate_up,
             dense=dense,
             unknown=unknown,
+            image_size=image_size,
+            units=units,
+            up=up,
+            pitch=pitch,
+            swap=swap,
         )
     if figures is not None:
         _write_figures(description, figures)
@@ -181,6 +197,34 @@ def describe_inputs(**inputs: Any) -> Any:
             "IMAGES",
             f"give LEFT RIGHT (a stereo pair) or one COLOR image, not {len(images)} "
             "(or --scene FILE for a saved description)",
+        )
+    stereo_db = (
+        len(images) == 2
+        and inputs.get("db") is not None
+        and all(inputs.get(k) is None for k in ("masks", "boxes", "depth", "labels"))
+    )
+    if stereo_db and inputs.get("calib") is not None:
+        # The stereo pipeline with the calibration options and plausibility checks of
+        # docs/trust.md (--units, --up/--pitch, --image-size, --swap).
+        rig = _load_rig(
+            inputs["calib"],
+            inputs.get("calib_right"),
+            image_size=inputs.get("image_size"),
+            units=inputs.get("units") or "m",
+            up=inputs.get("up"),
+            pitch=inputs.get("pitch"),
+            swap=bool(inputs.get("swap")),
+        )
+        left, right = images
+        if inputs.get("swap"):
+            left, right = right, left
+        return _describe(
+            left,
+            right,
+            rig,
+            inputs["db"],
+            dense=inputs.get("dense") is not False,
+            unknown=inputs.get("unknown") is not False,
         )
     scene_inputs = SceneInputs(
         color=images[0],
@@ -234,6 +278,52 @@ def _print_views(
             f"Only the {name}: nothing to relate."
         ]
     _echo(json.dumps(data) if fmt is TextOrJson.json else "\n".join(lines))
+
+
+def _describe(left: Path, right: Path, rig: Any, db: Path, **options: Any) -> Any:
+    """The pipeline on files, with the plausibility checks of ``docs/trust.md``."""
+    import numpy as np
+
+    from scenespeak.perception import plausibility
+    from scenespeak.perception.database import ObjectDatabase
+    from scenespeak.perception.features import load_image
+    from scenespeak.pipeline import describe_scene
+
+    left_img = load_image(left, gray=False)
+    right_img = load_image(right, gray=False)
+    plausibility.check_pair_order(left_img, right_img, rig, names=(str(left), str(right)))
+    sources = {"left": str(left), "right": str(right), "calib": rig.source, "db": str(db)}
+    with ObjectDatabase.open(db, readonly=True) as database:
+        description = describe_scene(left_img, right_img, rig, database, sources=sources, **options)
+    z = np.array([o["centroid"][2] for o in description.to_dict()["objects"] if o.get("centroid")])
+    if len(z):
+        fx = float(rig.K_left[0, 0])
+        with np.errstate(divide="ignore"):
+            plausibility.check_depths(z, fx * rig.baseline / z, rig.source, min_points=1)
+    return description
+
+
+def _describe(left: Path, right: Path, rig: Any, db: Path, **options: Any) -> Any:
+    """The pipeline on files, with the plausibility checks of ``docs/trust.md``."""
+    import numpy as np
+
+    from scenespeak.perception import plausibility
+    from scenespeak.perception.recognition import ObjectDatabase
+    from scenespeak.perception.features import load_image
+    from scenespeak.pipeline import describe_scene
+
+    left_img = load_image(left, gray=False)
+    right_img = load_image(right, gray=False)
+    plausibility.check_pair_order(left_img, right_img, rig, names=(str(left), str(right)))
+    sources = {"left": str(left), "right": str(right), "calib": rig.source, "db": str(db)}
+    with ObjectDatabase.open(db, readonly=True) as database:
+        description = describe_scene(left_img, right_img, rig, database, sources=sources, **options)
+    z = np.array([o["centroid"][2] for o in description.to_dict()["objects"] if o.get("centroid")])
+    if len(z):
+        fx = float(rig.K_left[0, 0])
+        with np.errstate(divide="ignore"):
+            plausibility.check_depths(z, fx * rig.baseline / z, rig.source, min_points=1)
+    return description
 
 
 def _write_figures(description: Any, out_dir: Path) -> list[Path]:

@@ -11,8 +11,14 @@ import typer
 from scenespeak.cli._app import (
     CalibOpt,
     CalibRightOpt,
+    ImageSizeOpt,
+    PitchOpt,
     PointsFormat,
     QuietOpt,
+    SwapOpt,
+    UnitsOpt,
+    UpOpt,
+    _check_ratio,
     _echo,
     _load_rig,
     _status,
@@ -32,20 +38,34 @@ def points_cmd(
         PointsFormat.json
     ),
     out: Annotated[Path | None, typer.Option("--out", help="Write here, not stdout.")] = None,
-    ratio: Annotated[float, typer.Option(help="Lowe's ratio test threshold.")] = 0.6,
+    ratio: Annotated[
+        float,
+        typer.Option(help="Lowe's ratio test threshold, in (0, 1].", callback=_check_ratio),
+    ] = 0.6,
+    image_size: ImageSizeOpt = None,
+    units: UnitsOpt = "m",
+    up: UpOpt = None,
+    pitch: PitchOpt = None,
+    swap: SwapOpt = False,
     quiet: QuietOpt = False,
 ) -> None:
     """Matched and triangulated keypoints of a stereo pair (before any labelling)."""
-    from scenespeak.perception import stereo
+    from scenespeak.perception import plausibility, stereo
     from scenespeak.perception.features import load_image
 
-    rig = _load_rig(calib, calib_right)
+    rig = _load_rig(
+        calib, calib_right, image_size=image_size, units=units, up=up, pitch=pitch, swap=swap
+    )
+    if swap:
+        left, right = right, left
     left_img = load_image(left)
     right_img = load_image(right)
     with _status("matching the stereo pair", quiet):
+        plausibility.check_pair_order(left_img, right_img, rig, names=(str(left), str(right)))
         points = _stereo_points(
             stereo, left_img, right_img, rig, ratio=ratio, sources=(left, right)
         )
+        plausibility.check_depths(points.xyz[:, 2], points.disparity, rig.source)
     if fmt is PointsFormat.ply:
         if out is None:
             raise InputError(
@@ -54,7 +74,7 @@ def points_cmd(
         try:
             stereo.write_ply(points, out)
         except OSError as exc:
-            raise InputError(out, f"cannot write ({exc.strerror})") from exc
+            raise InputError(out, f"cannot write ({exc.strerror or exc})") from exc
         return
     text = json.dumps(stereo.points_to_json(points))
     if out is None:
@@ -100,5 +120,6 @@ def _stereo_points(
         right_name=names[1],
         dense_crop=True,
         dense_margin=DENSE_MARGIN,
+        min_points=1,
     )
     return result.points

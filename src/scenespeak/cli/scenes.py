@@ -19,13 +19,16 @@ from scenespeak.cli._app import (
     scenes_app,
 )
 from scenespeak.cli.describe import _print_description
+from scenespeak.errors import InputError
 
 
 @scenes_app.command("generate")
 def scenes_generate(
     out: Annotated[Path, typer.Argument(help="Folder to write the dataset into.")],
     n: Annotated[int, typer.Option("--n", min=1, help="Number of scenes.")] = 10,
-    seed: Annotated[int, typer.Option("--seed", help="Random seed.")] = 0,
+    seed: Annotated[
+        int, typer.Option("--seed", min=0, max=2**32 - 1, help="Random seed (0 to 2**32-1).")
+    ] = 0,
     pitched: Annotated[
         bool, typer.Option("--pitched", help="A rig pitched down instead of a level one.")
     ] = False,
@@ -44,10 +47,20 @@ def scenes_generate(
     _echo(f"wrote {n} scene(s) to {out}")
 
 
+def _check_out(out: Path) -> None:
+    if out.exists() and not out.is_dir():
+        raise InputError(out, "exists and is not a folder; give a folder to write the dataset into")
+
+
 def _generate(
     out: Path, n: int, *, seed: int, pitched: bool, quiet: bool, depth_noise: bool = False
 ) -> Any:
+    from scenespeak import limits
     from scenespeak.tools.scenes import generate_dataset
+
+    if n > limits.current().max_scenes:
+        raise InputError("--n", limits.exceeded("max_scenes", f"{n} scenes", 0))
+    _check_out(out)
 
     progress = _progress(n, "rendering", quiet)
     if progress is None:
@@ -71,7 +84,12 @@ def demo_cmd(
         Path | None,
         typer.Argument(help="Folder for the scene and database (default: a temporary folder)."),
     ] = None,
-    seed: Annotated[int, typer.Option("--seed", help="Random seed of the scene.")] = 0,
+    seed: Annotated[
+        int,
+        typer.Option(
+            "--seed", min=0, max=2**32 - 1, help="Random seed of the scene (0 to 2**32-1)."
+        ),
+    ] = 0,
     fmt: Annotated[TextOrJson, typer.Option("--format", help="text or json.")] = TextOrJson.text,
     quiet: QuietOpt = False,
 ) -> None:

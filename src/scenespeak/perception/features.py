@@ -83,6 +83,21 @@ class Features:
         )
 
 
+def _check_pixels(height: int, width: int) -> None:
+    from scenespeak import limits
+
+    lim = limits.current()
+    if height * width > lim.max_image_pixels:
+        raise ImageError(
+            None,
+            limits.exceeded(
+                "max_image_pixels",
+                f"the image is {width} x {height} = {width * height} pixels, which",
+                0,
+            ),
+        )
+
+
 def to_gray(image: NDArray[np.generic]) -> NDArray[np.uint8]:
     """Convert an image array (gray, RGB or RGBA; uint8 or float in [0, 1]) to gray uint8.
 
@@ -96,6 +111,13 @@ def to_gray(image: NDArray[np.generic]) -> NDArray[np.uint8]:
         raise ImageError(
             None, f"expected a gray, RGB or RGBA image, got an array of shape {arr.shape}"
         )
+    if arr.dtype.kind not in "buif":
+        raise ImageError(
+            None, f"expected an image of real numbers (uint8 or float), got dtype {arr.dtype}"
+        )
+    _check_pixels(arr.shape[0], arr.shape[1])
+    if arr.dtype == np.bool_:
+        arr = arr.astype(np.uint8) * 255
     if arr.dtype != np.uint8:
         if np.issubdtype(arr.dtype, np.floating):
             if not np.all(np.isfinite(arr)):
@@ -127,23 +149,23 @@ def load_image(path: str | PathLike[str], *, gray: bool = True) -> NDArray[np.ui
     Raises
     ------
     ImageError
-        If the file is missing, empty, or not a readable image.
+        If the file is missing, empty, not a regular file (a folder, a FIFO, a device), over
+        :attr:`~scenespeak.limits.Limits.max_file_bytes`, declares more pixels in its header
+        than :attr:`~scenespeak.limits.Limits.max_image_pixels` (checked before decoding), or
+        is not a readable image (truncated, corrupt: said once, without the decoder's own
+        warnings).
     """
+    from scenespeak.safeio import decode_image, read_bytes
+
     p = Path(path)
-    if not p.exists():
-        raise ImageError(p, "no such file")
-    if p.is_dir():
-        raise ImageError(p, "is a folder, not an image file")
-    if p.stat().st_size == 0:
-        raise ImageError(p, "the file is empty")
-    data = np.fromfile(p, dtype=np.uint8)
+    data = read_bytes(p, error=ImageError, what="image file")
     flag = cv2.IMREAD_GRAYSCALE if gray else cv2.IMREAD_COLOR
-    image = cv2.imdecode(data, flag)
-    if image is None or image.size == 0:
-        raise ImageError(p, "cannot be read as an image (corrupt or unsupported format)")
+    image = decode_image(data, p, flags=flag)
+    if image.ndim < 2 or min(image.shape[:2]) < 1:
+        raise ImageError(p, f"the image has no pixels (shape {image.shape})")
     if not gray:
         image = cv2.cvtColor(image, cv2.COLOR_BGR2RGB)
-    return np.asarray(image, dtype=np.uint8)  # imdecode gives uint8: the same array
+    return np.ascontiguousarray(image, dtype=np.uint8)
 
 
 def detect(

@@ -37,7 +37,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial import ConvexHull, QhullError
 
-from scenespeak.errors import CalibrationError
+from scenespeak.errors import CalibrationError, InputError
 from scenespeak.perception.calibration import ground_basis
 
 __all__ = [
@@ -219,6 +219,22 @@ def radius_inliers(xy: ArrayLike, radius: float) -> NDArray[np.bool_]:
     return np.linalg.norm(p - med, axis=1) <= radius
 
 
+def _real_points(values: ArrayLike, name: str, dims: int | None) -> NDArray[np.float64]:
+    """Points as float64 ``(N, dims)``; complex, text or wrongly shaped input refused."""
+    try:
+        arr = np.asarray(values)
+    except (TypeError, ValueError) as exc:
+        raise InputError(name, f"cannot be read as points ({exc})") from None
+    if arr.dtype.kind not in "biuf" or np.iscomplexobj(arr):
+        raise InputError(name, f"points must be real numbers, got dtype {arr.dtype}")
+    if dims is not None and not (arr.ndim == 2 and arr.shape[1] == dims) and arr.size:
+        raise InputError(name, f"expected an (N, {dims}) array of points, got shape {arr.shape}")
+    p = arr.astype(np.float64)
+    if not np.isfinite(p).all():
+        raise InputError(name, "a point is NaN or infinite")
+    return p
+
+
 def dbscan(points: ArrayLike, eps: float, min_samples: int = 3) -> NDArray[np.intp]:
     """DBSCAN (Ester et al. 1996) on a k-d tree: cluster number per point, -1 for noise.
 
@@ -236,7 +252,13 @@ def dbscan(points: ArrayLike, eps: float, min_samples: int = 3) -> NDArray[np.in
     >>> dbscan([[0, 0], [0.01, 0], [0.02, 0], [1, 1]], eps=0.015, min_samples=2).tolist()
     [0, 0, 0, -1]
     """
-    p = np.asarray(points, dtype=np.float64)
+    p = _real_points(points, "points", None)
+    if p.ndim != 2 and p.size:
+        raise InputError("points", f"expected an (N, D) array of points, got shape {p.shape}")
+    if isinstance(eps, bool) or not isinstance(eps, int | float | np.integer | np.floating):
+        raise InputError("eps", f"must be a positive distance, got {eps!r}")
+    if not (np.isfinite(eps) and eps > 0):
+        raise InputError("eps", f"must be a positive finite distance, got {eps}")
     n = len(p)
     labels = np.full(n, -1, dtype=np.intp)
     if n == 0:
@@ -457,8 +479,8 @@ def convex_hull(xy: ArrayLike, *, sliver_width: float = SLIVER_WIDTH) -> HullRes
 
     Raises
     ------
-    ValueError
-        If there are no points or a coordinate is not finite.
+    InputError
+        If there are no points, a coordinate is not finite, or the points are not real (N, 2).
 
     Examples
     --------
@@ -468,11 +490,12 @@ def convex_hull(xy: ArrayLike, *, sliver_width: float = SLIVER_WIDTH) -> HullRes
     >>> h.degenerate, h.polygon.shape
     ('collinear', (4, 2))
     """
-    p = np.asarray(xy, dtype=np.float64).reshape(-1, 2)
+    p = _real_points(xy, "convex_hull", None)
+    if p.size and (p.ndim != 2 or p.shape[1] != 2) and not (p.ndim == 1 and p.size == 2):
+        raise InputError("convex_hull", f"expected (N, 2) points, got shape {p.shape}")
+    p = p.reshape(-1, 2)
     if len(p) == 0:
-        raise ValueError("convex_hull needs at least one point")
-    if not np.all(np.isfinite(p)):
-        raise ValueError("convex_hull got a point that is NaN or infinite")
+        raise InputError("convex_hull", "needs at least one point")
     uniq = _unique_rows(p)
     if len(uniq) == 1:
         return HullResult(_sliver(uniq, sliver_width), "point")

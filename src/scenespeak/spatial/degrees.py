@@ -34,6 +34,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from scenespeak.errors import InputError
+
 #: The four directions, in the order of their angles 0, 90, 180, 270 degrees (docs/interfaces.md:
 #: 0 = right, 90 = behind = farther from the camera, 180 = left, 270 = in front).
 DIRECTIONS: tuple[str, str, str, str] = ("right", "behind", "left", "front")
@@ -128,6 +130,33 @@ def _constants(nbins: int) -> _Constants:
     return _Constants(**arrays, weight_sum=weight.sum())
 
 
+def check_histogram(h: object, name: str = "histogram") -> NDArray[np.float64]:
+    """``h`` as a 1-D float64 histogram, or :class:`InputError` saying why it is not one.
+
+    A histogram of forces is real, finite and non-negative, with a number of bins divisible by
+    4 (at most :attr:`~scenespeak.limits.Limits.max_directions`). All zero is allowed: every
+    degree is then 0 (nothing is said, see :mod:`scenespeak.spatial.language`).
+    """
+    from scenespeak import limits
+
+    try:
+        arr = np.asarray(h)
+    except (TypeError, ValueError) as exc:
+        raise InputError(name, f"cannot be read as an array ({exc})") from None
+    if arr.dtype.kind not in "iuf" or np.iscomplexobj(arr):
+        raise InputError(name, f"must be real numbers, got dtype {arr.dtype}")
+    if arr.ndim != 1 or arr.size < 4 or arr.size % 4:
+        raise InputError(name, f"must be 1-D with a multiple of 4 bins, got shape {arr.shape}")
+    if arr.size > limits.current().max_directions:
+        raise InputError(name, limits.exceeded("max_directions", f"{arr.size} bins", 0))
+    arr = arr.astype(np.float64)
+    if not np.isfinite(arr).all():
+        raise InputError(name, "contains NaN or infinite values")
+    if (arr < 0).any():
+        raise InputError(name, "has negative values; forces are never negative")
+    return arr
+
+
 def direction_degree(h: NDArray[np.float64], index: int) -> DirectionDegree:
     """Degree of truth that the argument lies in the direction of bin ``index``.
 
@@ -148,6 +177,11 @@ def direction_degree(h: NDArray[np.float64], index: int) -> DirectionDegree:
     >>> round(direction_degree(h, 90).degree, 4)   # 30 deg off "left" (180 deg)
     0.6667
     """
+    h = check_histogram(h)
+    if isinstance(index, bool) or not isinstance(index, int | np.integer):
+        raise InputError("index", f"must be a bin number, got {index!r}")
+    if not 0 <= index < h.size:
+        raise InputError("index", f"must be a bin in 0..{h.size - 1}, got {index}")
     nbins = h.size
     n = nbins // 4
     c = _constants(nbins)
@@ -315,5 +349,6 @@ def four_degrees(h: NDArray[np.float64]) -> dict[str, DirectionDegree]:
     >>> [round(d.degree, 12) for d in four_degrees(h).values()]
     [0.0, 0.0, 0.0, 0.0]
     """
+    h = check_histogram(h)
     n = h.size // 4
     return {name: direction_degree(h, k * n) for k, name in enumerate(DIRECTIONS)}

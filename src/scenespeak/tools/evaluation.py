@@ -34,7 +34,6 @@ The scoring is pure (:func:`score_scene`, :func:`summarize`), so it can be check
 
 from __future__ import annotations
 
-import json
 import math
 import tempfile
 import time
@@ -139,7 +138,10 @@ class PredictedScene:
 
 
 def _vec3(value: Any, where: str) -> tuple[float, float, float]:
-    arr = np.asarray(value, dtype=np.float64).ravel()
+    try:
+        arr = np.asarray(value, dtype=np.float64).ravel()
+    except (TypeError, ValueError):
+        raise InputError(where, f"expected three numbers [X, Y, Z], got {value!r:.60}") from None
     if arr.shape != (3,) or not np.isfinite(arr).all():
         raise InputError(where, f"expected three finite numbers [X, Y, Z], got {value!r:.60}")
     return (float(arr[0]), float(arr[1]), float(arr[2]))
@@ -153,13 +155,12 @@ def load_scene_truth(scene_dir: str | PathLike[str]) -> SceneTruth:
     InputError
         If the file is missing, not JSON, or lacks ``objects`` with ``label`` and ``centroid``.
     """
+    from scenespeak.safeio import load_json, read_text
+
     path = Path(scene_dir) / "truth.json"
-    try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-    except FileNotFoundError as exc:
-        raise InputError(path, "missing: every labelled scene needs a truth.json") from exc
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise InputError(path, f"cannot be read as JSON ({exc})") from exc
+    if not path.exists() and not path.is_symlink():
+        raise InputError(path, "missing: every labelled scene needs a truth.json")
+    data = load_json(read_text(path, what="truth.json file"), path)
     if not isinstance(data, Mapping) or not isinstance(data.get("objects"), list):
         raise InputError(path, 'expected {"objects": [...], "relations": [...]}')
     try:
@@ -180,6 +181,10 @@ def load_scene_truth(scene_dir: str | PathLike[str]) -> SceneTruth:
         )
     except (KeyError, TypeError) as exc:
         raise InputError(path, f"an object or relation lacks the field {exc}") from exc
+    except InputError as exc:
+        if exc.source is not None and str(path) in exc.source:
+            raise
+        raise InputError(path, exc.problem if exc.source is None else str(exc)) from None
     return SceneTruth(Path(scene_dir).name, objects, relations)
 
 
@@ -629,15 +634,7 @@ def find_scenes(dataset_dir: str | PathLike[str]) -> list[Path]:
         raise InputError(root, "not a folder; give a dataset made by `scenespeak scenes generate`")
     index = root / "dataset.json"
     if index.is_file():
-        try:
-            names = json.loads(index.read_text(encoding="utf-8"))["scenes"]
-        except (OSError, ValueError, KeyError, TypeError) as exc:
-            raise InputError(index, f'cannot read its "scenes" list ({exc})') from exc
-        scenes = [root / str(n) for n in names]
-        missing = [s.name for s in scenes if not s.is_dir()]
-        if missing:
-            raise InputError(index, f"lists scenes that are not there: {', '.join(missing[:5])}")
-        return scenes
+        return _indexed_scenes(root, index)
 
     def is_scene(p: Path) -> bool:
         return all((p / f).is_file() for f in ("left.png", "right.png", "calib.json", "truth.json"))
@@ -649,6 +646,30 @@ def find_scenes(dataset_dir: str | PathLike[str]) -> list[Path]:
         raise InputError(
             root, "holds no scene (folders with left.png, right.png, calib.json, truth.json)"
         )
+    return scenes
+
+
+def _indexed_scenes(root: Path, index: Path) -> list[Path]:
+    """The scenes ``dataset.json`` lists, each a folder inside the dataset (never outside)."""
+    from scenespeak import limits
+    from scenespeak.safeio import clean_text, load_json, read_text, within
+
+    data = load_json(read_text(index, what="dataset.json file"), index)
+    names = data.get("scenes") if isinstance(data, Mapping) else None
+    if not isinstance(names, list):
+        raise InputError(index, 'expected {"scenes": ["scene_000", ...], ...}')
+    if len(names) > limits.current().max_scenes:
+        raise InputError(index, limits.exceeded("max_scenes", f"{len(names)} scenes", 0))
+    scenes = []
+    for n in names:
+        if not isinstance(n, str):
+            raise InputError(
+                index, f"a scene entry must be a folder name, got {clean_text(repr(n))[:60]}"
+            )
+        scenes.append(within(root, n, index))
+    missing = [clean_text(s.name) for s in scenes if not s.is_dir()]
+    if missing:
+        raise InputError(index, f"lists scenes that are not there: {', '.join(missing[:5])}")
     return scenes
 
 

@@ -29,8 +29,10 @@ Like the seed paper's figures:
 from __future__ import annotations
 
 import base64
+import contextlib
 import html
 import io
+import os
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from os import PathLike
@@ -643,7 +645,42 @@ def _scene_view(description: Any) -> _SceneView:
 
 
 def _save(fig: Figure, path: Path, dpi: float | None = None) -> Path:
-    fig.savefig(path, dpi=dpi, facecolor="white")
+    buf = io.BytesIO()
+    _plain_text(fig).savefig(buf, format="png", dpi=dpi, facecolor="white")
+    return _write_file(path, buf.getvalue())
+
+
+def _plain_text(fig: Figure) -> Figure:
+    """Labels come from files (a database someone else made): "$x$" stays text, not mathtext."""
+    from matplotlib.text import Text
+
+    for t in fig.findobj(Text):
+        t.set_parse_math(False)  # type: ignore[attr-defined]
+    return fig
+
+
+def _write_file(path: Path, data: bytes) -> Path:
+    """Write ``data`` to ``path`` without following a symlink planted there.
+
+    The bytes go to a new file beside it (``O_EXCL | O_NOFOLLOW``), which then replaces
+    ``path`` itself: a symlink at ``path`` is replaced, its target is never written.
+    """
+    if path.is_dir() and not path.is_symlink():
+        raise InputError(path, "is a folder; cannot write the figure there (remove or rename it)")
+    flags = os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_NOFOLLOW", 0)
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    try:
+        fd = os.open(tmp, flags, 0o644)
+        try:
+            with os.fdopen(fd, "wb", closefd=False) as f:
+                f.write(data)
+        finally:
+            os.close(fd)
+        os.replace(tmp, path)
+    except OSError as exc:
+        with contextlib.suppress(OSError):
+            tmp.unlink()
+        raise InputError(path, f"cannot write the figure ({exc.strerror or exc})") from None
     return path
 
 
@@ -738,11 +775,7 @@ def write_figures(
     list of Path
         The files written, in the order above.
     """
-    out = Path(out_dir)
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise InputError(out, f"cannot create the figures folder ({exc.strerror})") from exc
+    out = _figures_dir(out_dir)
     view = _scene_view(description)
     written = [
         _save(build(), out / f"{name}.png", dpi) for name, build in _scene_figures(view, pair)
@@ -750,6 +783,17 @@ def write_figures(
     if report:
         written.extend(write_report(description, out, pair=pair, _view=view))
     return written
+
+
+def _figures_dir(out_dir: str | PathLike[str]) -> Path:
+    out = Path(out_dir)
+    if out.exists() and not out.is_dir():
+        raise InputError(out, "exists and is not a folder; --figures needs a folder")
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise InputError(out, f"cannot create the figures folder ({exc.strerror or exc})") from exc
+    return out
 
 
 def plot_report(
@@ -833,7 +877,9 @@ def plot_report(
 def _render(fig: Figure, dpi: float = 100.0) -> NDArray[np.uint8]:
     buf = io.BytesIO()
     # cropped to what is drawn, so that the page can lay each picture out at its real shape
-    fig.savefig(buf, format="png", dpi=dpi, facecolor="white", bbox_inches="tight", pad_inches=0.05)
+    _plain_text(fig).savefig(
+        buf, format="png", dpi=dpi, facecolor="white", bbox_inches="tight", pad_inches=0.05
+    )
     buf.seek(0)
     from matplotlib.image import imread
 
@@ -888,15 +934,14 @@ def write_report(
     list of Path
         ``[report.png, report.html]``.
     """
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
+    out = _figures_dir(out_dir)
     view = _scene_view(description) if _view is None else _view
     png = _save(plot_report(description, pair=pair, _view=view), out / "report.png", 100.0)
 
     images = []
     for name, build in _scene_figures(view, pair):
         buf = io.BytesIO()
-        build().savefig(buf, format="png", dpi=90, facecolor="white")
+        _plain_text(build()).savefig(buf, format="png", dpi=90, facecolor="white")
         data = base64.b64encode(buf.getvalue()).decode("ascii")
         images.append(
             f'<figure><img alt="{html.escape(name)}" src="data:image/png;base64,{data}">'
@@ -921,8 +966,7 @@ def write_report(
         objects=objects,
         skipped=f"<h2>Not described</h2><ul>{skipped}</ul>" if skipped else "",
     )
-    page_path = out / "report.html"
-    page_path.write_text(page, encoding="utf-8")
+    page_path = _write_file(out / "report.html", page.encode("utf-8"))
     return [png, page_path]
 
 

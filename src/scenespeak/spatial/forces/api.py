@@ -16,6 +16,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from scenespeak.errors import InputError
+from scenespeak.spatial.forces import guards
 from scenespeak.spatial.forces.contact import _contact
 from scenespeak.spatial.forces.kernel import KernelSpec, sweep_pairs
 from scenespeak.spatial.forces.regions import MASK_TOLERANCE as _MASK_TOLERANCE
@@ -25,11 +26,7 @@ FloatArray = NDArray[np.float64]
 
 
 def _check_directions(directions: int) -> int:
-    if isinstance(directions, bool) or not isinstance(directions, int | np.integer):
-        raise InputError("directions", f"must be a positive integer, got {directions!r}")
-    if directions < 1:
-        raise InputError("directions", f"must be a positive integer, got {directions}")
-    return int(directions)
+    return guards.check_directions(directions)
 
 
 _F0 = KernelSpec(0.0)
@@ -47,12 +44,9 @@ def _sweep_one(
 def _pair(
     argument: ArrayLike, referent: ArrayLike, mask_tolerance: float | None
 ) -> tuple[Region, Region]:
-    try:
-        a_arr, b_arr = np.asarray(argument), np.asarray(referent)
-    except (TypeError, ValueError) as exc:
-        raise InputError(
-            "argument/referent", f"cannot be read as vertex arrays or masks ({exc})"
-        ) from exc
+    a_arr = guards.as_vertices(argument, "argument")
+    b_arr = guards.as_vertices(referent, "referent")
+    mask_tolerance = guards.check_tolerance(mask_tolerance)
     a_mask, b_mask = a_arr.dtype == np.bool_, b_arr.dtype == np.bool_
     if a_mask != b_mask:
         raise InputError(
@@ -123,13 +117,7 @@ def force_histogram(
 
 
 def _check_r(r: object) -> float:
-    try:
-        value = float(r)  # type: ignore[arg-type]
-    except (TypeError, ValueError) as exc:
-        raise InputError("r", f"must be a real number, got {r!r}") from exc
-    if not math.isfinite(value):
-        raise InputError("r", f"must be a finite real number, got {value}")
-    return value
+    return guards.check_r(r)
 
 
 def _check_defined(a: Region, b: Region, r: float) -> None:
@@ -192,9 +180,14 @@ def force_histograms(
     exponents = [_check_r(x) for x in np.atleast_1d(np.asarray(r, dtype=object))]
     if not exponents:
         raise InputError("r", "give at least one exponent")
-    a, b = _pair(argument, referent, mask_tolerance)
+    a_arr, b_arr, k = guards.normalise_pair(
+        guards.as_vertices(argument, "argument"), guards.as_vertices(referent, "referent")
+    )
+    a, b = _pair(a_arr, b_arr, mask_tolerance)
     _check_defined(a, b, max(exponents))
-    return _sweep_one(a, b, [KernelSpec(x) for x in exponents], directions)
+    with np.errstate(all="ignore"):
+        h = _sweep_one(a, b, [KernelSpec(x) for x in exponents], directions)
+    return guards.rescaled(h, k, exponents)
 
 
 def hybrid_histogram(
@@ -240,16 +233,26 @@ def hybrid_histogram(
     """
     directions = _check_directions(directions)
     for label, value in (("p0", p0), ("p1", p1)):
-        if not (isinstance(value, int | float | np.number) and math.isfinite(value)) or (value < 0):
-            raise InputError(label, f"must be a finite number >= 0, got {value!r}")
-    a, b = _pair(argument, referent, mask_tolerance)
+        if (
+            isinstance(value, bool)
+            or not (isinstance(value, int | float | np.number) and math.isfinite(value))
+            or value < 0
+            or value > 1e3
+        ):
+            raise InputError(label, f"must be a finite number in [0, 1000], got {value!r}")
+    a_arr, b_arr, k = guards.normalise_pair(
+        guards.as_vertices(argument, "argument"), guards.as_vertices(referent, "referent")
+    )
+    a, b = _pair(a_arr, b_arr, mask_tolerance)
     inter, _ = _contact(a, b)
     d_min = 2.0 * math.sqrt(min(a.area, b.area) / math.pi)
     d_int = 2.0 * math.sqrt(inter / math.pi)
     y0 = max(float(p0) * d_min, float(p1) * d_int)
     if y0 <= 0:
         raise InputError("p0/p1", "Y0 = max(p0*D_min, p1*D_AB) is 0: give p0 > 0")
-    return _sweep_one(a, b, [KernelSpec(2.0, hybrid=True)], directions, y0)[0]
+    with np.errstate(all="ignore"):
+        h = _sweep_one(a, b, [KernelSpec(2.0, hybrid=True)], directions, y0)
+    return guards.rescaled(h, k, [2.0])[0]
 
 
 def _f0_and_f2(

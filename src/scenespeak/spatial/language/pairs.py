@@ -139,13 +139,27 @@ def pair_histograms(a: ArrayLike, b: ArrayLike, *, directions: int = 180) -> Pai
     >>> p.f0.shape, p.hybrid, int(np.argmax(p.f2))           # bin 90 = 180°: to the left
     ((180,), False, 90)
     """
-    pa = as_polygon(a, "argument polygon")
-    pb = as_polygon(b, "referent polygon")
+    from scenespeak.spatial.forces import guards
+
+    directions = guards.check_directions(directions)
     if directions < 8 or directions % 4:
         raise InputError("directions", f"must be a multiple of 4 and >= 8, got {directions}")
+    # Coordinates far from unit size are computed at unit size and scaled back (F0 ~ k^3,
+    # F2 and F02 ~ k, areas ~ k^2), so 1e-160 or 1e150 never give NaN or all-zero forces.
+    a_arr, b_arr, k = guards.normalise_pair(
+        guards.as_vertices(a, "argument polygon"), guards.as_vertices(b, "referent polygon")
+    )
+    pa = as_polygon(a_arr, "argument polygon")
+    pb = as_polygon(b_arr, "referent polygon")
     inter = intersection_area(pa, pb)
     area_a, area_b = abs(polygon_area(pa)), abs(polygon_area(pb))
     f0, f2, hybrid = _histograms(pa, pb, directions, inter > 1e-12 * min(area_a, area_b))
+    if k != 1.0:
+        f0 = guards.rescaled(f0, k, [0.0])
+        f2 = guards.rescaled(f2, k, [2.0])
+        inter, area_a, area_b = inter * k * k, area_a * k * k, area_b * k * k
+        if not np.isfinite([inter, area_a, area_b]).all():
+            raise InputError("argument/referent", f"areas of objects of size {k:.3g} overflow")
     return PairHistograms(
         _as_histogram(f0, "f0"), _as_histogram(f2, "f2"), hybrid, inter, area_a, area_b
     )

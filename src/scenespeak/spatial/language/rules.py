@@ -28,9 +28,12 @@ _ANGLE_DEG = {"right": 0.0, "behind": 90.0, "left": 180.0, "front": 270.0}
 
 def _as_histogram(h: ArrayLike, name: str) -> NDArray[np.float64]:
     try:
-        a = np.asarray(h, dtype=np.float64)
+        raw = np.asarray(h)
     except (TypeError, ValueError) as exc:
         raise InputError(name, f"must be a 1-D array of forces ({exc})") from None
+    if raw.dtype.kind not in "iuf" or np.iscomplexobj(raw):
+        raise InputError(name, f"must be a 1-D array of real forces, got dtype {raw.dtype}")
+    a = raw.astype(np.float64)
     if a.ndim != 1 or a.size < 8 or a.size % 4:
         raise InputError(
             name,
@@ -46,6 +49,23 @@ def _as_histogram(h: ArrayLike, name: str) -> NDArray[np.float64]:
     if np.any(a < -1e-9 * max(float(np.abs(a).max()), 1e-300)):
         raise InputError(name, "has negative forces; a force histogram is non-negative")
     return np.maximum(a, 0.0)
+
+
+#: A histogram whose largest force is below this says nothing (all zero, or denormal noise).
+_NOTHING = 1e-290
+
+
+def _check_something(a: NDArray[np.float64], name: str) -> None:
+    """Refuse a histogram with no force in any direction: it must never become a sentence."""
+    top = float(a.max(initial=0.0))
+    if not top > _NOTHING:
+        raise InputError(
+            name,
+            "is zero in every direction (no force between the objects: empty, identical or "
+            "degenerate regions), so nothing can be said about where one is from the other",
+        )
+    if not math.isfinite(float(a.sum())):
+        raise InputError(name, "forces are too large to add up in float64; normalise the histogram")
 
 
 def _as_histograms(
@@ -311,6 +331,8 @@ def describe_relation(
     referent = _label(referent, "referent")
     h0 = _as_histogram(f0, "f0")
     h2 = _as_histogram(f2, "f2")
+    _check_something(h0, "f0")
+    _check_something(h2, "f2")
     if h0.size != h2.size:
         raise InputError("f2", f"has {h2.size} bins but f0 has {h0.size}; use one `directions`")
     if vertical is not None and vertical not in VERTICAL_WORDS:

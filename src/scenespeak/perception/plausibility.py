@@ -1,0 +1,275 @@
+"""Is this calibration, and this scene, plausible? Refusals with the reason and the fix.
+
+A calibration can be valid (finite, a rotation, a non-zero baseline) and still wrong in the ways
+people actually get wrong:
+
+* **millimetres** — OpenCV's stereo_calib sample and most chessboard tutorials measure the
+  board in millimetres, so ``T = [-193, 0, 0]`` means 19.3 cm; read as metres every depth is
+  1000× too far. A baseline over :attr:`~scenespeak.limits.Limits.max_baseline_m` is refused
+  with "looks like millimetres: pass --units mm" (:func:`with_units` converts);
+* **left and right swapped** — ``T[0] > 0`` says the right camera is to the left of the left
+  one (:func:`check_rig`); swapped images show as most matches having a negative disparity
+  (:func:`check_pair_order`);
+* **a scene that cannot be** — a median depth of hundreds of metres or a median disparity under
+  a pixel (:func:`check_depths`), what a wrong unit or a swapped pair gives on a table scene.
+
+Each check raises :class:`~scenespeak.errors.CalibrationError` naming the calibration file; the
+bounds are in :mod:`scenespeak.limits` and can be raised there (``--limit``).
+
+>>> from scenespeak.perception.calibration import rig_from_short
+>>> check_rig(rig_from_short(120.0, 60.0, (640, 480), source="calib.json"))
+... # doctest: +ELLIPSIS
+Traceback (most recent call last):
+...
+scenespeak.errors.CalibrationError: calib.json: ... looks like millimetres: pass --units mm ...
+>>> round(with_units(rig_from_short(120.0, 60.0, (640, 480)), "mm").baseline, 3)
+0.12
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+from typing import Literal
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from scenespeak import limits as _limits
+from scenespeak.errors import CalibrationError, InputError
+from scenespeak.perception.calibration import Rectification, StereoRig, rectify
+
+__all__ = [
+    "UNITS",
+    "check_depths",
+    "check_pair_order",
+    "check_rig",
+    "pitch_up",
+    "swapped",
+    "with_units",
+]
+
+Units = Literal["m", "cm", "mm"]
+#: Length units a calibration's translations may be written in, and their size in metres.
+UNITS: dict[str, float] = {"m": 1.0, "cm": 0.01, "mm": 0.001}
+
+
+def with_units(rig: StereoRig, units: str) -> StereoRig:
+    """The rig with ``T`` converted from ``units`` to metres (``"m"``: unchanged).
+
+    Raises
+    ------
+    InputError
+        An unknown unit (``--units`` names m, cm or mm).
+    """
+    key = units.strip().lower() if isinstance(units, str) else units
+    if key not in UNITS:
+        raise InputError("--units", f"unknown unit {units!r}; use one of m, cm, mm")
+    if key == "m":
+        return rig
+    return replace(rig, T=np.asarray(rig.T) * UNITS[key])
+
+
+def swapped(rig: StereoRig) -> StereoRig:
+    """The rig with its cameras exchanged (the right camera becomes the left one).
+
+    For a calibration whose "left" camera is physically on the right (``T[0] > 0``, e.g. a
+    stereo_calib run with the image names swapped): ``K``, ``dist`` exchanged,
+    ``R' = Rᵀ``, ``T' = −Rᵀ T``; give the images in the other order too (the CLI's ``--swap``
+    does both). ``up`` is turned into the new left camera's frame.
+
+    >>> from scenespeak.perception.calibration import rig_from_short
+    >>> swapped(rig_from_short(0.12, 60.0, (640, 480))).T.tolist()
+    [0.12, -0.0, -0.0]
+    """
+    R = np.asarray(rig.R)
+    T = np.asarray(rig.T)
+    return replace(
+        rig,
+        K_left=rig.K_right,
+        K_right=rig.K_left,
+        dist_left=rig.dist_right,
+        dist_right=rig.dist_left,
+        R=R.T,
+        T=-R.T @ T,
+        up=R @ np.asarray(rig.up),
+    )
+
+
+def pitch_up(pitch_deg: float) -> NDArray[np.float64]:
+    """World up in the left camera's frame for a rig pitched ``pitch_deg`` down (0 = level).
+
+    The camera's Y axis points down and Z forward; pitched down by ``a``, the world's up is
+    ``(0, -cos a, -sin a)`` (the scene generator's convention, ``tools/scenes.py``).
+
+    >>> pitch_up(0.0).tolist()
+    [0.0, -1.0, -0.0]
+    """
+    try:
+        a = float(pitch_deg)
+    except (TypeError, ValueError):
+        raise InputError("--pitch", f"must be a number of degrees, got {pitch_deg!r}") from None
+    if not math.isfinite(a) or not -90.0 < a < 90.0:
+        raise InputError("--pitch", f"must be between -90 and 90 degrees (down), got {a}")
+    r = math.radians(a)
+    return np.array([0.0, -math.cos(r), -math.sin(r)])
+
+
+def check_rig(rig: StereoRig) -> StereoRig:
+    """Refuse a rig whose baseline or camera order cannot be right; return it otherwise.
+
+    Raises
+    ------
+    CalibrationError
+        A baseline over ``max_baseline_m`` (named as millimetres or centimetres when it looks
+        like them) or under ``min_baseline_m``; a right camera to the left of the left one.
+    """
+    lim = _limits.current()
+    b = rig.baseline
+    src = rig.source
+    if b > lim.max_baseline_m:
+        unit = "millimetres: pass --units mm" if b >= 20 else "centimetres: pass --units cm"
+        raise CalibrationError(
+            src,
+            f"the baseline is {b:g} (in the file's units); read as metres that is a {b:g} m "
+            f"rig, which looks like {unit} (or write T / baseline in metres); "
+            "--limit max_baseline_m=N allows larger rigs",
+        )
+    if b < lim.min_baseline_m:
+        raise CalibrationError(
+            src,
+            f"the baseline is {b:g} m, under {lim.min_baseline_m:g} m: T must be in metres "
+            "(--units mm / cm convert); --limit min_baseline_m=N allows smaller rigs",
+        )
+    w = rig.image_size[0]
+    for name, k in (("K_left", rig.K_left), ("K_right", rig.K_right)):
+        fx = float(k[0, 0])
+        if not 0.05 * w <= fx <= 100.0 * w:
+            hfov = 2 * math.degrees(math.atan(w / (2 * fx)))
+            raise CalibrationError(
+                src,
+                f"{name}: a focal length of {fx:.4g} px for images {w} px wide means a "
+                f"{hfov:.3g} degree field of view, which no stereo camera has: check fx "
+                "(pixels) and the image size",
+            )
+    t = np.asarray(rig.T)
+    if t[0] > 0 and abs(t[0]) >= 0.5 * b:
+        raise CalibrationError(
+            src,
+            f"T[0] = {t[0]:g} > 0 says the right camera is to the LEFT of the left camera: the "
+            "cameras look swapped (images named the wrong way round when calibrating?); pass "
+            "--swap to exchange both the images and the calibration's cameras",
+        )
+    return rig
+
+
+def _sift_matches(
+    left: NDArray[np.generic], right: NDArray[np.generic], rect: Rectification
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Rectified positions of mutual ratio-test SIFT matches in the epipolar band (any sign)."""
+    import cv2
+
+    from scenespeak.perception.features import detect, to_gray
+
+    fl = detect(to_gray(left), max_features=1500)
+    fr = detect(to_gray(right), max_features=1500)
+    if len(fl) < 8 or len(fr) < 8:
+        return np.zeros((0, 2)), np.zeros((0, 2))
+    matcher = cv2.BFMatcher(cv2.NORM_L2)
+    dl = fl.descriptors.astype(np.float32)
+    dr = fr.descriptors.astype(np.float32)
+    knn = matcher.knnMatch(dl, dr, k=2)
+    pairs = [
+        (m[0].queryIdx, m[0].trainIdx)
+        for m in knn
+        if len(m) == 2 and m[0].distance < 0.7 * m[1].distance
+    ]
+    if not pairs:
+        return np.zeros((0, 2)), np.zeros((0, 2))
+    li, ri = np.array(pairs).T
+    lxy = rect.rectify_points(fl.xy[li], "left")
+    rxy = rect.rectify_points(fr.xy[ri], "right")
+    band = np.abs(lxy[:, 1] - rxy[:, 1]) <= 1.5
+    return lxy[band], rxy[band]
+
+
+def check_pair_order(
+    left: NDArray[np.generic],
+    right: NDArray[np.generic],
+    rig: StereoRig,
+    *,
+    names: tuple[str, str] = ("LEFT", "RIGHT"),
+    rect: Rectification | None = None,
+    min_matches: int = 20,
+) -> float:
+    """Refuse a pair whose matches mostly have negative disparity (images swapped).
+
+    Matches are taken without the usual positive-disparity filter (which would hide the
+    problem: a swapped pair keeps only its few wrong matches and reports them far away).
+
+    Returns
+    -------
+    float
+        The fraction of matches with a negative depth-giving disparity ``x_l − x_r + doffs``.
+
+    Raises
+    ------
+    CalibrationError
+        More than half of at least ``min_matches`` matches are negative.
+    """
+    r = rect if rect is not None else rectify(rig)
+    lxy, rxy = _sift_matches(left, right, r)
+    if len(lxy) < min_matches:
+        return 0.0
+    disparity = lxy[:, 0] - rxy[:, 0] + r.doffs
+    negative = float(np.mean(disparity < 0))
+    if negative > 0.5:
+        raise CalibrationError(
+            rig.source,
+            f"{negative:.0%} of {len(lxy)} stereo matches have a negative disparity: {names[0]} "
+            f"and {names[1]} look swapped; give the left camera's image first",
+        )
+    return negative
+
+
+def check_depths(
+    depths: ArrayLike,
+    disparities: ArrayLike,
+    source: str,
+    *,
+    min_points: int = 10,
+) -> None:
+    """Refuse a scene whose median depth or disparity is implausible for this rig.
+
+    Parameters
+    ----------
+    depths : array
+        Depths (Z in the left camera frame, metres) of the triangulated points.
+    disparities : array
+        Their depth-giving disparities in pixels.
+    source : str
+        The calibration file (what is most likely wrong).
+
+    Raises
+    ------
+    CalibrationError
+        Median depth over ``max_scene_depth_m`` or median disparity under
+        ``min_median_disparity_px`` (with at least ``min_points`` points).
+    """
+    z = np.asarray(depths, dtype=np.float64).ravel()
+    d = np.asarray(disparities, dtype=np.float64).ravel()
+    z = z[np.isfinite(z)]
+    d = d[np.isfinite(d)]
+    if len(z) < min_points:
+        return
+    lim = _limits.current()
+    mz = float(np.median(z))
+    md = float(np.median(d)) if len(d) else math.inf
+    if mz > lim.max_scene_depth_m or md < lim.min_median_disparity_px:
+        raise CalibrationError(
+            source,
+            f"the scene's median depth is {mz:.4g} m (median disparity {md:.3g} px over "
+            f"{len(z)} points), which is not plausible: check that T is in metres (--units mm "
+            "for millimetres) and that LEFT and RIGHT are in order; "
+            "--limit max_scene_depth_m=N / min_median_disparity_px=N accept such scenes",
+        )
