@@ -118,6 +118,15 @@ def _open_video(path: str | PathLike[str] | int) -> Any:
     return cap
 
 
+def _time(cap: Any, k: int) -> float:
+    """The time of the frame just read: the container's timestamp, else ``k / fps``."""
+    t = float(cap.get(cv2.CAP_PROP_POS_MSEC)) / 1000.0
+    if t > 0 or k == 0:
+        return t
+    fps = float(cap.get(cv2.CAP_PROP_FPS))
+    return k / fps if fps > 0 else float(k)
+
+
 def _rgb(frame: NDArray[np.uint8]) -> NDArray[np.uint8]:
     return cv2.cvtColor(frame, cv2.COLOR_BGR2RGB)
 
@@ -134,11 +143,11 @@ def video_frames(
     try:
         k = 0
         while max_frames is None or k < max_frames:
-            t = float(cl.get(cv2.CAP_PROP_POS_MSEC)) / 1000.0
             okl, fl = cl.read()
             okr, fr = cr.read()
             if not okl or not okr:
                 return
+            t = _time(cl, k)
             yield Frame(k, t, _rgb(fl), _rgb(fr), f"{left} frame {k}")
             k += 1
     finally:
@@ -154,10 +163,10 @@ def sbs_frames(path: str | PathLike[str], *, max_frames: int | None = None) -> I
     try:
         k = 0
         while max_frames is None or k < max_frames:
-            t = float(cap.get(cv2.CAP_PROP_POS_MSEC)) / 1000.0
             ok, f = cap.read()
             if not ok:
                 return
+            t = _time(cap, k)
             w = f.shape[1]
             if w % 2:
                 yield BrokenFrame(k, f"{path} frame {k}", f"odd width {w}: not side by side")

@@ -592,13 +592,16 @@ def load_sequence(seq_dir: str | PathLike[str]) -> SequenceTruth:
 
 
 def sequence_database(
-    out_dir: str | PathLike[str], *, image_size: tuple[int, int] = (640, 480)
+    out_dir: str | PathLike[str],
+    *,
+    image_size: tuple[int, int] = (640, 480),
+    labels: Sequence[str] | None = None,
 ) -> Path:
-    """Render the training views of the catalogue objects the scripts use into
-    ``out_dir/objects/<label>/`` (the dataset layout that
+    """Render the training views of the catalogue objects the scripts use (or of ``labels``)
+    into ``out_dir/objects/<label>/`` (the dataset layout that
     :func:`scenespeak.pipeline.database_from_dataset` reads); existing views are kept."""
     out = Path(out_dir)
-    used = sorted(set(_OCCLUDERS) | set(_MOVERS))
+    used = sorted(set(_OCCLUDERS) | set(_MOVERS)) if labels is None else sorted(set(labels))
     for label in used:
         d = out / "objects" / label
         if not (d / "view_00_mask.png").exists():
