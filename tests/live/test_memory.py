@@ -12,7 +12,7 @@ SQ = np.array([[0.0, 0.0], [0.08, 0.0], [0.08, 0.08], [0.0, 0.08]])
 
 
 def _obj(label: str, x: float, y: float) -> SpatialObject:
-    return SpatialObject(label, label, SQ + [x, y])
+    return SpatialObject(label, label, SQ + np.array([x, y]))
 
 
 def _frame(mug_x: float, can=True, jitter=0.0, rng=None) -> list[Sighting]:

@@ -13,7 +13,8 @@ uvicorn (:func:`serve`), bound to 127.0.0.1 unless told otherwise.
   states it (``max_side`` pixels a side, ``max_pixels`` in all), the calibration file
   (64 KiB), the number of form parts.
 - **Errors**: anything wrong with a request is a 4xx response ``{"error": "<one line>"}``
-  (400 bad input, 413 too large, 415 not PNG/JPEG, 501 not available); an unexpected failure is
+  (400 bad input, 413 too large, 415 not PNG/JPEG; 501 for questions when this version
+  cannot answer them); an unexpected failure is
   a 500 with the same shape, and the server goes on.
 
 The JSON of ``/api/describe`` is the JSON of ``scenespeak describe --format json`` for the same
@@ -155,8 +156,6 @@ class _Workers:
     def __init__(self, db_path: Path, workers: int) -> None:
         self.db_path = db_path
         self.local = threading.local()
-        self.all: list[Any] = []
-        self.lock = threading.Lock()
         self.pool = ThreadPoolExecutor(
             max_workers=workers, thread_name_prefix="scenespeak-serve", initializer=self._open
         )
@@ -173,8 +172,6 @@ class _Workers:
             self.local.error = exc
             return
         self.local.db = db
-        with self.lock:
-            self.all.append(db)
 
     def _ready(self) -> None:
         import time
@@ -191,10 +188,22 @@ class _Workers:
         return self.local.db
 
     def close(self) -> None:
-        self.pool.shutdown(wait=True)
-        with self.lock:
-            for db in self.all:
+        """Close every worker's database in its own thread, then stop the pool."""
+        n = self.pool._max_workers
+        barrier = threading.Barrier(n, timeout=30)
+
+        def close_mine() -> None:
+            db = getattr(self.local, "db", None)
+            if db is not None:
                 db.close()
+            try:
+                barrier.wait()  # so that every thread takes one of these jobs
+            except threading.BrokenBarrierError:
+                pass
+
+        for f in [self.pool.submit(close_mine) for _ in range(n)]:
+            f.result()
+        self.pool.shutdown(wait=True)
 
 
 def _outlines(description: Any) -> dict[str, Any]:
@@ -335,8 +344,15 @@ def create_app(
         async for chunk in request.stream():
             received += len(chunk)
             if received > lim.max_body:
-                raise RequestProblem(413, f"the request body is over {lim.max_body} bytes")
+                # Read (and drop) up to as much again, so that the client, still sending, reads
+                # the answer instead of a reset connection; then answer.
+                if received > 2 * lim.max_body:
+                    break
+                chunks = []
+                continue
             chunks.append(chunk)
+        if received > lim.max_body:
+            raise RequestProblem(413, f"the request body is over {lim.max_body} bytes")
         body = b"".join(chunks)
 
         async def replay() -> dict[str, Any]:
@@ -360,7 +376,7 @@ def create_app(
         files, fields = await read_form(request)
         if "color" in files or "depth" in files:
             raise RequestProblem(
-                501, "color + depth input is not available in this version (send left and right)"
+                400, "color + depth input is not available in this version (send left and right)"
             )
         for need in ("left", "right"):
             if need not in files:
