@@ -340,7 +340,7 @@ def create_app(
         if not ctype.startswith("multipart/form-data"):
             raise RequestProblem(400, "send a multipart/form-data form (files left, right, ...)")
         received = 0
-        chunks = []
+        chunks: list[bytes] = []
         async for chunk in request.stream():
             received += len(chunk)
             if received > lim.max_body:

@@ -128,7 +128,7 @@ def _time(cap: Any, k: int) -> float:
 
 
 def _rgb(frame: NDArray[np.uint8]) -> NDArray[np.uint8]:
-    return cv2.cvtColor(frame, cv2.COLOR_BGR2RGB)
+    return np.asarray(cv2.cvtColor(frame, cv2.COLOR_BGR2RGB), dtype=np.uint8)
 
 
 def video_frames(

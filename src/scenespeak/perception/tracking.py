@@ -172,11 +172,13 @@ class _State:
 
 def _gray(img: NDArray[np.generic]) -> NDArray[np.uint8]:
     a = np.asarray(img)
-    if a.ndim == 3:
-        a = cv2.cvtColor(a, cv2.COLOR_RGB2GRAY)
     if a.dtype != np.uint8:
-        a = cv2.normalize(a, None, 0, 255, cv2.NORM_MINMAX).astype(np.uint8)
-    return np.ascontiguousarray(a)
+        f = a.astype(np.float64)
+        lo, hi = float(np.nanmin(f)), float(np.nanmax(f))
+        a = np.round((f - lo) * (255.0 / max(hi - lo, 1e-12))).astype(np.uint8)
+    if a.ndim == 3:
+        return np.ascontiguousarray(cv2.cvtColor(a, cv2.COLOR_RGB2GRAY), dtype=np.uint8)
+    return np.ascontiguousarray(a, dtype=np.uint8)
 
 
 def _hue_hist(img: NDArray[np.generic], mask: NDArray[np.uint8]) -> NDArray[np.float32]:
@@ -186,7 +188,8 @@ def _hue_hist(img: NDArray[np.generic], mask: NDArray[np.uint8]) -> NDArray[np.f
     else:
         hsv = cv2.cvtColor(np.ascontiguousarray(a[..., :3], dtype=np.uint8), cv2.COLOR_RGB2HSV)
         h = cv2.calcHist([hsv], [0, 1], mask, [12, 4], [0, 180, 0, 256])
-    return cv2.normalize(h, None, 1.0, 0.0, cv2.NORM_L1).astype(np.float32)
+    h = np.asarray(h, dtype=np.float32)
+    return (h / max(float(h.sum()), 1e-12)).astype(np.float32)
 
 
 def _box(xy: NDArray[np.float64]) -> tuple[float, float, float, float]:
@@ -287,7 +290,8 @@ class ObjectTracker:
             t0 = time.perf_counter()
             self._recognised(description, left, gl, gr, k)
             self._last_key = k
-            self._key_small = cv2.resize(gl, (w // 4, h // 4), interpolation=cv2.INTER_AREA)
+            small = cv2.resize(gl, (w // 4, h // 4), interpolation=cv2.INTER_AREA)
+            self._key_small = np.asarray(small, dtype=np.uint8)
             timings["match"] = time.perf_counter() - t0
         self._size = (w, h)
         self._prev_gray = gl
@@ -346,10 +350,10 @@ class ObjectTracker:
         crit = (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 20, 0.03)
         assert self._prev_gray is not None
         fwd, st1, _ = cv2.calcOpticalFlowPyrLK(
-            self._prev_gray, gl, pts, None, winSize=win, maxLevel=3, criteria=crit
+            self._prev_gray, gl, pts, pts.copy(), winSize=win, maxLevel=3, criteria=crit
         )
         back, st2, _ = cv2.calcOpticalFlowPyrLK(
-            gl, self._prev_gray, fwd, None, winSize=win, maxLevel=3, criteria=crit
+            gl, self._prev_gray, fwd, fwd.copy(), winSize=win, maxLevel=3, criteria=crit
         )
         fb = np.linalg.norm((back - pts).reshape(-1, 2), axis=1)
         guess = (rpts + (fwd - pts)).astype(np.float32)

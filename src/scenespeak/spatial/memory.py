@@ -322,20 +322,19 @@ class WorkingMemory:
         ]
         key = tuple((e.id, e.version, names[e.id]) for e in present)
         if key != self._cache_key:
+            heights = [e.heights for e in present if e.heights is not None]
             raw = (
                 relate_objects(
                     [e.hull for e in present],
                     names=[names[e.id] for e in present],
-                    heights=None
-                    if any(e.heights is None for e in present)
-                    else [e.heights for e in present],
+                    heights=heights if len(heights) == len(present) else None,
                     directions=self.options.directions,
                 )
                 if len(present) >= 2
                 else []
             )
-            ids = {names[e.id]: e.id for e in present}
-            self._cache = [(rel, (ids[rel.argument], ids[rel.referent])) for rel, _ in raw]
+            by_name = {names[e.id]: e.id for e in present}
+            self._cache = [(rel, (by_name[rel.argument], by_name[rel.referent])) for rel, _ in raw]
             self._cache_key = key
         out = []
         changed: dict[frozenset[int], tuple[int, int]] = {}

@@ -506,7 +506,8 @@ def generate_sequence(
     out = Path(out_dir)
     rng = np.random.default_rng([int(seed), SCRIPTS.index(script)])
     shots = _SCRIPTS[script](rng, n_frames)
-    objects = [pl.obj for pl in next(s for s in shots if None not in s.placements).placements]
+    full = next(s for s in shots if None not in s.placements).placements
+    objects = [pl.obj for pl in full if pl is not None]
     labels = [o.label for o in objects]
     rig = Rig(0.0, 0.25, 0.12, 60.0, (int(image_size[0]), int(image_size[1])))
     out.parent.mkdir(parents=True, exist_ok=True)
