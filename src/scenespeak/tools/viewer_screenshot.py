@@ -47,7 +47,7 @@ def main(argv: list[str] | None = None) -> int:
         "--cache", type=Path, default=Path(tempfile.gettempdir()) / "scenespeak-live-bench"
     )
     ap.add_argument("--chromium", default="/usr/bin/chromium")
-    ap.add_argument("--question", default="where is the tin?")
+    ap.add_argument("--question", default="where is the can?")
     args = ap.parse_args(argv)
     left, right, calib, db = _data(args.cache)
     app = create_app(db, workers=1)
