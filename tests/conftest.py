@@ -54,3 +54,7 @@ def real_data() -> Path:
     if root is None:
         pytest.skip("real data folder ../shared/data/real is absent (set SCENESPEAK_REAL_DATA)")
     return root
+
+
+# The rendered sequence and database of the live tests (tests/live, tests/cli/test_watch.py).
+from livedata import live_data  # noqa: E402, F401

@@ -20,7 +20,17 @@ from typing import Any
 import click
 import typer
 
-from scenespeak.cli import annotate, ask, db, describe, evaluate, points, scenes  # noqa: F401
+from scenespeak.cli import (  # noqa: F401  (each registers its command)
+    annotate,
+    ask,
+    db,
+    describe,
+    evaluate,
+    points,
+    scenes,
+    serve,
+    watch,
+)
 from scenespeak.cli._app import EXIT_INPUT, app
 from scenespeak.errors import ScenespeakError
 

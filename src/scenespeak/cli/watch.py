@@ -1,0 +1,177 @@
+"""``scenespeak watch``: a stereo stream in, one JSON line per frame out (``docs/live.md``)."""
+
+from __future__ import annotations
+
+import json
+import sys
+import tempfile
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Annotated, Any
+
+import typer
+
+from scenespeak.cli._app import CalibRightOpt, DbOpt, QuietOpt, app
+from scenespeak.errors import InputError, ScenespeakError
+
+
+def _source(
+    frames: Path | None,
+    left_video: Path | None,
+    right_video: Path | None,
+    sbs: Path | None,
+    cameras: tuple[int, int] | None,
+    rosbag: Path | None,
+    topics: tuple[str | None, str | None],
+    fps: float,
+    max_frames: int | None,
+) -> Iterator[Any]:
+    from scenespeak.live import sources
+
+    given = [
+        n
+        for n, v in (
+            ("--frames", frames),
+            ("--left-video/--right-video", left_video or right_video),
+            ("--sbs", sbs),
+            ("--cameras", cameras),
+            ("--rosbag", rosbag),
+        )
+        if v is not None
+    ]
+    if len(given) != 1:
+        raise InputError(
+            "watch",
+            "give exactly one source: --frames DIR, --left-video L --right-video R, --sbs F, "
+            f"--cameras I J or --rosbag BAG (given: {', '.join(given) or 'none'})",
+        )
+    if frames is not None:
+        return sources.folder_frames(frames, fps=fps)
+    if left_video is not None or right_video is not None:
+        if left_video is None or right_video is None:
+            raise InputError("watch", "--left-video and --right-video go together")
+        return sources.video_frames(left_video, right_video, max_frames=max_frames)
+    if sbs is not None:
+        return sources.sbs_frames(sbs, max_frames=max_frames)
+    if cameras is not None:
+        return sources.camera_frames(cameras[0], cameras[1], max_frames=max_frames)
+    assert rosbag is not None
+    if topics[0] is None or topics[1] is None:
+        raise InputError(rosbag, "give --left-topic and --right-topic (sensor_msgs/Image)")
+    return sources.rosbag_frames(rosbag, topics[0], topics[1])
+
+
+def _rig(
+    calib: Path | None,
+    calib_right: Path | None,
+    rosbag: Path | None,
+    info: tuple[str | None, str | None],
+    tmp: str,
+) -> Any:
+    from scenespeak.cli._app import _load_rig
+
+    if calib is not None:
+        return _load_rig(calib, calib_right)
+    if rosbag is not None and info[0] and info[1]:
+        from scenespeak.live.sources import rosbag_rig
+
+        return rosbag_rig(rosbag, info[0], info[1], tmp)
+    raise InputError(
+        "watch", "give --calib (or, with --rosbag, --left-info and --right-info CameraInfo topics)"
+    )
+
+
+def _warn(where: str, problem: str) -> None:
+    sys.stderr.write(f"scenespeak: warning: {where}: {problem}\n")
+    sys.stderr.flush()
+
+
+@app.command("watch")
+def watch_cmd(
+    db: DbOpt,
+    calib: Annotated[
+        Path | None, typer.Option("--calib", help="Calibration (as for describe).")
+    ] = None,
+    calib_right: CalibRightOpt = None,
+    frames: Annotated[
+        Path | None,
+        typer.Option(
+            "--frames", help="Folder: NNNN/{left,right}.png or left_NNNN.png + right_NNNN.png."
+        ),
+    ] = None,
+    left_video: Annotated[Path | None, typer.Option("--left-video", help="Left video.")] = None,
+    right_video: Annotated[Path | None, typer.Option("--right-video", help="Right video.")] = None,
+    sbs: Annotated[Path | None, typer.Option("--sbs", help="Side-by-side stereo video.")] = None,
+    cameras: Annotated[
+        tuple[int, int] | None, typer.Option("--cameras", help="Two OpenCV camera indices.")
+    ] = None,
+    rosbag: Annotated[Path | None, typer.Option("--rosbag", help="A ROS 2 (or 1) bag.")] = None,
+    left_topic: Annotated[
+        str | None, typer.Option("--left-topic", help="Left Image topic.")
+    ] = None,
+    right_topic: Annotated[
+        str | None, typer.Option("--right-topic", help="Right Image topic.")
+    ] = None,
+    left_info: Annotated[
+        str | None, typer.Option("--left-info", help="Left CameraInfo topic (instead of --calib).")
+    ] = None,
+    right_info: Annotated[
+        str | None, typer.Option("--right-info", help="Right CameraInfo topic.")
+    ] = None,
+    keyframe_every: Annotated[
+        int,
+        typer.Option("--keyframe-every", min=1, help="Full recognition at least every K frames."),
+    ] = 10,
+    fps: Annotated[
+        float, typer.Option("--fps", min=0.001, help="Frame rate of a --frames folder (time_s).")
+    ] = 30.0,
+    max_frames: Annotated[
+        int | None, typer.Option("--max-frames", min=1, help="Stop after this many frames.")
+    ] = None,
+    unknown: Annotated[
+        bool, typer.Option("--unknown/--no-unknown", help="Also keep unknown point clusters.")
+    ] = False,
+    quiet: QuietOpt = False,
+) -> None:
+    """Describe a stereo stream frame by frame with a working memory (JSON Lines)."""
+    from scenespeak.live.stream import SceneStream, StreamOptions
+    from scenespeak.perception.database import ObjectDatabase
+    from scenespeak.perception.tracking import TrackingOptions
+    from scenespeak.pipeline import PipelineOptions
+
+    del quiet  # no progress: the stream itself is the output
+    with tempfile.TemporaryDirectory(prefix="scenespeak-watch-") as tmp:
+        rig = _rig(calib, calib_right, rosbag, (left_info, right_info), tmp)
+        items = _source(
+            frames, left_video, right_video, sbs, cameras, rosbag,
+            (left_topic, right_topic), fps, max_frames,
+        )  # fmt: skip
+        options = StreamOptions(
+            tracking=TrackingOptions(keyframe_every=keyframe_every),
+            pipeline=PipelineOptions(unknown=unknown, summary=False),
+        )
+        with ObjectDatabase.open(db, readonly=True) as database:
+            stream = SceneStream(rig, database, options)
+            _run(stream, items, max_frames)
+
+
+def _run(stream: Any, items: Iterator[Any], max_frames: int | None) -> None:
+    from scenespeak.live.sources import BrokenFrame
+
+    done = 0
+    for item in items:
+        if max_frames is not None and done >= max_frames:
+            break
+        done += 1
+        if isinstance(item, BrokenFrame):
+            _warn(item.source, item.problem)
+            continue
+        try:
+            frame = stream.process(item.left, item.right, item.time_s)
+        except ScenespeakError as exc:
+            _warn(item.source, str(exc))
+            continue
+        line = frame.to_dict()
+        line["frame"] = item.index
+        sys.stdout.write(json.dumps(line) + "\n")
+        sys.stdout.flush()

@@ -1,0 +1,639 @@
+"""Rendered stereo *sequences* with the truth of every frame, for the working memory.
+
+A sequence is a short scripted film of the scene generator's objects (:mod:`.scenes`): one
+object slides across the table (``slide``), one appears (``appear``), one slides behind a
+larger one until it is hidden (``hide``), or the camera turns until an object leaves the view
+(``pan``). Every frame is rendered by pybullet's TinyRenderer with the generator's meshes,
+textures and rig (one pybullet connection per sequence: the bodies are moved, not rebuilt),
+and the truth of every frame is written beside the images.
+
+Layout (``interfaces.md``, "Streams"; ``docs/live.md``)::
+
+    SEQ/calib.json            the rig (short form: a level, rectified rig)
+    SEQ/truth.json            {"script", "seed", "frames": [...], "events": [...]}
+    SEQ/0000/left.png, SEQ/0000/right.png, ...
+
+``truth.json["frames"][k]["objects"]`` gives, per object present, its truth ``id`` (stable over
+the sequence), ``label``, ``centroid`` (left camera frame, metres), ``footprint`` (horizontal
+plane), ``visible_fraction`` (unhidden share of its silhouette) and ``in_view`` (share of the
+silhouette inside the image). ``truth.json["events"]`` lists the scripted changes with the
+frame they happen at (``docs/live.md`` gives the rule of each kind):
+
+- ``{"kind": "moved", "object": id, "referent": id, "relation": "behind", "frame": k}``: the
+  primary ground-truth relation (:func:`scenespeak.tools.scenes.footprint_relation`) of the
+  pair changed to a new unambiguous value at frame ``k``;
+- ``{"kind": "appeared", "object": id, "frame": k}``;
+- ``{"kind": "hidden", "object": id, "referent": id, "frame": k}``: first frame where less
+  than :data:`HIDDEN_VISIBLE` of it is visible, behind ``referent``;
+- ``{"kind": "out of view", "object": id, "frame": k}``: first frame where less than
+  :data:`OUT_OF_VIEW_INSIDE` of its silhouette is inside the left image.
+
+>>> import tempfile
+>>> from scenespeak.tools.sequences import generate_sequence, load_sequence
+>>> seq = generate_sequence(tempfile.mkdtemp() + "/s", "appear", seed=1, n_frames=4,
+...                         image_size=(160, 120))  # doctest: +SKIP
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import tempfile
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from os import PathLike
+from pathlib import Path
+from typing import Any
+
+import cv2
+import numpy as np
+from numpy.typing import NDArray
+
+from scenespeak.errors import InputError
+from scenespeak.perception.calibration import ground_basis
+from scenespeak.tools.render import (
+    FLOOR_RGBA,
+    LIGHT_DIRECTION,
+    Camera,
+    texture_image,
+    write_box_obj,
+    write_cylinder_obj,
+)
+from scenespeak.tools.scenes import (
+    CATALOGUE,
+    SUPERSAMPLE,
+    CatalogueObject,
+    Placement,
+    Rig,
+    footprint_relation,
+    render_training_views,
+)
+
+__all__ = [
+    "HIDDEN_VISIBLE",
+    "OUT_OF_VIEW_INSIDE",
+    "SCRIPTS",
+    "FrameTruth",
+    "SequenceTruth",
+    "generate_sequence",
+    "generate_sequence_set",
+    "load_sequence",
+    "sequence_database",
+]
+
+#: Scripts a sequence can follow.
+SCRIPTS = ("slide", "appear", "hide", "pan")
+#: An object is "hidden" once less than this share of its silhouette is visible.
+HIDDEN_VISIBLE = 0.25
+#: An object is "out of view" once less than this share of its silhouette is inside the image.
+OUT_OF_VIEW_INSIDE = 0.3
+FORMAT = "scenespeak-sequence/1"
+
+_BY_LABEL = {o.label: o for o in CATALOGUE}
+#: Objects that hide others (tall and wide) and objects that slide (small, well textured).
+_OCCLUDERS = ("box", "shoebox", "book")
+_MOVERS = ("mug", "can", "tin")
+
+
+@dataclass(frozen=True)
+class _Shot:
+    """One frame of a script: where each object is (None = absent) and the camera's pan."""
+
+    placements: tuple[Placement | None, ...]
+    pan_deg: float = 0.0
+
+
+@dataclass(frozen=True)
+class FrameTruth:
+    """The truth of one frame (``truth.json["frames"][k]``)."""
+
+    index: int
+    pan_deg: float
+    objects: tuple[dict[str, Any], ...]
+
+    def object(self, truth_id: int) -> dict[str, Any] | None:
+        """The object with this truth id, if present in the frame."""
+        for o in self.objects:
+            if o["id"] == truth_id:
+                return o
+        return None
+
+
+@dataclass(frozen=True)
+class SequenceTruth:
+    """A generated sequence: its folder, frames and scripted events."""
+
+    root: Path
+    script: str
+    seed: int
+    frames: tuple[FrameTruth, ...]
+    events: tuple[dict[str, Any], ...]
+    labels: dict[int, str] = field(default_factory=dict)
+
+    @property
+    def calib(self) -> Path:
+        return self.root / "calib.json"
+
+    def pair(self, k: int) -> tuple[Path, Path]:
+        """Left and right image of frame ``k``."""
+        d = self.root / f"{k:04d}"
+        return d / "left.png", d / "right.png"
+
+
+# --------------------------------------------------------------------------------------------
+# scripts
+
+
+def _spot(
+    rng: np.random.Generator, obj: CatalogueObject, x: tuple[float, float], y: tuple[float, float]
+) -> Placement:
+    yaw = rng.uniform(0, 360) if obj.shape == "cylinder" else rng.uniform(-15.0, 15.0)
+    return Placement(obj, (float(rng.uniform(*x)), float(rng.uniform(*y)), 0.0), float(yaw))
+
+
+def _moved(pl: Placement, x: float, y: float) -> Placement:
+    return Placement(pl.obj, (float(x), float(y), 0.0), pl.yaw_deg)
+
+
+def _pick(rng: np.random.Generator, names: Sequence[str], k: int) -> list[CatalogueObject]:
+    return [_BY_LABEL[n] for n in rng.choice(list(names), k, replace=False)]
+
+
+def _lerp_steps(n: int, start: int, length: int) -> NDArray[np.float64]:
+    """Progress 0..1 per frame: 0 before ``start``, linear over ``length`` frames, then 1."""
+    t = (np.arange(n) - start) / max(length, 1)
+    return np.clip(t, 0.0, 1.0)
+
+
+def _script_slide(rng: np.random.Generator, n: int) -> list[_Shot]:
+    """A mover slides from one side of a static object to its other side (or behind it)."""
+    mover, anchor = _pick(rng, _MOVERS, 1)[0], _pick(rng, ("box", "book", "shoebox"), 1)[0]
+    other = _pick(rng, [m for m in _MOVERS if m != mover.label], 1)[0]
+    a = _spot(rng, anchor, (-0.05, 0.05), (1.0, 1.15))
+    side = float(rng.choice([-1.0, 1.0]))
+    o = _spot(rng, other, (0.25, 0.3), (0.75, 0.85))
+    o = _moved(o, -side * o.position[0], o.position[1])
+    start = _moved(_spot(rng, mover, (0.22, 0.27), (0.95, 1.05)), 0, 0)
+    x0, y0 = side * rng.uniform(0.22, 0.27), rng.uniform(0.95, 1.1)
+    if rng.random() < 0.5:  # to the other side, passing in front of the anchor
+        path = [(x0, y0), (0.0, 0.72), (-x0, y0)]
+    else:  # to the front of the anchor
+        path = [(x0, y0), (x0 * 0.6, 0.85), (0.0, 0.72)]
+    t0, length = n // 4, n // 2
+    shots = []
+    for p in _lerp_steps(n, t0, length):
+        seg = min(int(p * 2), 1)
+        u = p * 2 - seg
+        (xa, ya), (xb, yb) = path[seg], path[seg + 1]
+        m = _moved(start, xa + (xb - xa) * u, ya + (yb - ya) * u)
+        shots.append(_Shot((a, o, m)))
+    return shots
+
+
+def _script_appear(rng: np.random.Generator, n: int) -> list[_Shot]:
+    """Two objects stand still; a third appears at a scripted frame."""
+    objs = _pick(rng, ("mug", "can", "tin", "box", "book"), 3)
+    spots = [((-0.3, -0.2), (0.8, 1.0)), ((0.15, 0.25), (1.0, 1.2)), ((-0.05, 0.05), (0.65, 0.75))]
+    order = rng.permutation(3)
+    placed = [_spot(rng, o, *spots[int(i)]) for o, i in zip(objs, order, strict=True)]
+    t = int(rng.integers(n // 3, n // 2 + 1))
+    return [_Shot((placed[0], placed[1], placed[2] if k >= t else None)) for k in range(n)]
+
+
+def _script_hide(rng: np.random.Generator, n: int) -> list[_Shot]:
+    """A small object slides behind a tall one until it is hidden."""
+    occ = _pick(rng, ("box", "book"), 1)[0]
+    mover = _pick(rng, _MOVERS, 1)[0]
+    other = _pick(rng, [m for m in _MOVERS if m != mover.label], 1)[0]
+    side = float(rng.choice([-1.0, 1.0]))
+    b = _spot(rng, occ, (-0.02, 0.02), (0.7, 0.75))
+    o = _spot(rng, other, (0.22, 0.28), (0.8, 0.9))
+    o = _moved(o, -side * o.position[0], o.position[1])
+    y = float(rng.uniform(1.05, 1.2))
+    x0 = side * float(rng.uniform(0.3, 0.36))
+    m0 = _spot(rng, mover, (0, 0), (y, y))
+    t0, length = n // 4, n // 3
+    return [_Shot((b, o, _moved(m0, x0 * (1 - p), y))) for p in _lerp_steps(n, t0, length)]
+
+
+def _script_pan(rng: np.random.Generator, n: int) -> list[_Shot]:
+    """Three objects stand still; the camera turns until one leaves the view."""
+    objs = _pick(rng, ("mug", "can", "tin", "box", "book"), 3)
+    side = float(rng.choice([-1.0, 1.0]))
+    placed = [
+        _spot(rng, objs[0], (-0.12, -0.05), (0.9, 1.0)),
+        _spot(rng, objs[1], (0.08, 0.15), (1.05, 1.15)),
+        _spot(rng, objs[2], (0.38, 0.42), (0.95, 1.0)),
+    ]
+    placed[2] = _moved(placed[2], side * placed[2].position[0], placed[2].position[1])
+    t0, length = n // 4, n // 2
+    pans = -side * 32.0 * _lerp_steps(n, t0, length)
+    return [_Shot(tuple(placed), float(p)) for p in pans]
+
+
+_SCRIPTS: dict[str, Callable[[np.random.Generator, int], list[_Shot]]] = {
+    "slide": _script_slide,
+    "appear": _script_appear,
+    "hide": _script_hide,
+    "pan": _script_pan,
+}
+
+
+# --------------------------------------------------------------------------------------------
+# cameras and rendering
+
+
+def _cameras(rig: Rig, pan_deg: float) -> tuple[Camera, Camera]:
+    """The rig turned by ``pan_deg`` about the world's up (positive = to the right)."""
+    a = np.radians(pan_deg)
+    right = np.array([np.cos(a), -np.sin(a), 0.0])
+    forward = np.array([np.sin(a), np.cos(a), 0.0])
+    down = np.array([0.0, 0.0, -1.0])
+    eye = np.array([0.0, 0.0, rig.height])
+    size, fov = rig.image_size, rig.hfov_deg
+    left = Camera(tuple(eye), tuple(right), tuple(down), tuple(forward), size, fov)
+    eye_r = eye + rig.baseline * right
+    return left, Camera(tuple(eye_r), tuple(right), tuple(down), tuple(forward), size, fov)
+
+
+class _Renderer:
+    """One pybullet connection with every object of a sequence loaded once."""
+
+    def __init__(self, objects: Sequence[CatalogueObject], tmp: Path) -> None:
+        import pybullet as p
+
+        self.p = p
+        self.cid = p.connect(p.DIRECT)
+        floor = p.createVisualShape(
+            p.GEOM_BOX, halfExtents=[30, 30, 0.005], rgbaColor=FLOOR_RGBA, physicsClientId=self.cid
+        )
+        self.floor = p.createMultiBody(
+            baseMass=0, baseVisualShapeIndex=floor, basePosition=[0, 0, -0.005],
+            physicsClientId=self.cid,
+        )  # fmt: skip
+        self.bodies: list[int] = []
+        textures: dict[str, int] = {}
+        for k, obj in enumerate(objects):
+            mesh = tmp / f"mesh_{k}.obj"
+            if obj.shape == "cylinder":
+                write_cylinder_obj(mesh, obj.size[0] / 2, obj.size[2])
+            else:
+                write_box_obj(mesh, *obj.size)
+            if obj.texture not in textures:
+                png = tmp / f"tex_{obj.texture}.png"
+                cv2.imwrite(str(png), texture_image(obj.texture)[:, :, ::-1])
+                textures[obj.texture] = p.loadTexture(str(png), physicsClientId=self.cid)
+            vis = p.createVisualShape(p.GEOM_MESH, fileName=str(mesh), physicsClientId=self.cid)
+            body = p.createMultiBody(
+                baseMass=0, baseVisualShapeIndex=vis, basePosition=[0, 0, -5],
+                physicsClientId=self.cid,
+            )  # fmt: skip
+            p.changeVisualShape(
+                body, -1, textureUniqueId=textures[obj.texture], rgbaColor=[1, 1, 1, 1],
+                physicsClientId=self.cid,
+            )  # fmt: skip
+            self.bodies.append(body)
+
+    def close(self) -> None:
+        self.p.disconnect(physicsClientId=self.cid)
+
+    def frame(
+        self, shot: _Shot, cams: Sequence[Camera]
+    ) -> list[tuple[NDArray[np.uint8], NDArray[np.int32]]]:
+        """Images and segmentations (-1 = floor, k = object k) of ``shot`` from ``cams``."""
+        p = self.p
+        for body, pl in zip(self.bodies, shot.placements, strict=True):
+            pos = [0.0, 0.0, -5.0] if pl is None else list(pl.position)
+            yaw = 0.0 if pl is None else np.radians(pl.yaw_deg)
+            p.resetBasePositionAndOrientation(
+                body, pos, p.getQuaternionFromEuler([0, 0, yaw]), physicsClientId=self.cid
+            )
+        out = []
+        for cam in cams:
+            w, h = cam.image_size
+            s = SUPERSAMPLE
+            res = p.getCameraImage(
+                w * s, h * s, cam.view(), cam.projection(s), renderer=p.ER_TINY_RENDERER,
+                shadow=0, lightDirection=list(LIGHT_DIRECTION), physicsClientId=self.cid,
+            )  # fmt: skip
+            rgba = np.reshape(np.asarray(res[2], np.uint8), (h * s, w * s, 4))
+            rgb = rgba[:, :, :3].astype(np.float32).reshape(h, s, w, s, 3).mean(axis=(1, 3))
+            raw = np.reshape(np.asarray(res[4], np.int64), (h * s, w * s))
+            seg = np.full(raw.shape, -1, np.int32)
+            for k, body in enumerate(self.bodies):
+                seg[raw == body] = k
+            out.append((np.round(rgb).astype(np.uint8), seg))
+        return out
+
+
+# --------------------------------------------------------------------------------------------
+# truth
+
+
+def _silhouette_area(cam: Camera, pl: Placement) -> tuple[float, float]:
+    """Area (final pixels) of the object's convex silhouette, and the share inside the image."""
+    xyz = cam.to_camera(pl.corners_world())
+    if (xyz[:, 2] < 0.05).any():
+        return 1.0, 0.0
+    uv = cam.project(pl.corners_world(), SUPERSAMPLE).astype(np.float32)
+    hull = cv2.convexHull(uv).reshape(-1, 2)
+    area = float(cv2.contourArea(hull))
+    w, h = cam.image_size
+    box = np.array([[0, 0], [w, 0], [w, h], [0, h]], np.float32)
+    inter, _ = cv2.intersectConvexConvex(hull, box)
+    return max(area, 1e-9), float(inter) / max(area, 1e-9)
+
+
+def _frame_truth(
+    k: int, shot: _Shot, cam: Camera, seg: NDArray[np.int32], labels: Sequence[str]
+) -> FrameTruth:
+    up = cam.rotation @ np.array([0.0, 0.0, 1.0])
+    basis = ground_basis(up)
+    objects = []
+    for i, pl in enumerate(shot.placements):
+        if pl is None:
+            continue
+        c = cam.to_camera(pl.centroid_world()[None])[0]
+        fpw = pl.footprint_world()
+        fp = cam.to_camera(np.c_[fpw, np.zeros(len(fpw))]) @ basis.T
+        area, inside = _silhouette_area(cam, pl)
+        pixels = int((seg == i).sum()) / SUPERSAMPLE**2
+        objects.append(
+            {
+                "id": i + 1,
+                "label": labels[i],
+                "centroid": [round(float(v), 6) for v in c],
+                "footprint": [[round(float(a), 6), round(float(b), 6)] for a, b in fp],
+                "visible_fraction": round(min(1.0, pixels / area), 4),
+                "in_view": round(inside, 4),
+            }
+        )
+    return FrameTruth(k, shot.pan_deg, tuple(objects))
+
+
+def _seen(o: dict[str, Any]) -> bool:
+    return o["in_view"] >= OUT_OF_VIEW_INSIDE and o["visible_fraction"] >= HIDDEN_VISIBLE
+
+
+def _relation_events(frames: Sequence[FrameTruth]) -> list[dict[str, Any]]:
+    """A pair's unambiguous truth relation changed while both objects were seen.
+
+    The event is said of the object that moved more since the pair's last unambiguous
+    relation (the argument), relative to the other (the referent).
+    """
+    events = []
+    last: dict[tuple[int, int], tuple[str, dict[int, NDArray[np.float64]]]] = {}
+    for fr in frames:
+        seen = [o for o in fr.objects if _seen(o)]
+        where = {o["id"]: np.asarray(o["footprint"]).mean(axis=0) for o in seen}
+        for a in seen:
+            for b in seen:
+                if a["id"] >= b["id"]:
+                    continue
+                fa, fb = np.asarray(a["footprint"]), np.asarray(b["footprint"])
+                primary, _, ambiguous = footprint_relation(fa, fb)
+                if ambiguous:
+                    continue
+                key = (a["id"], b["id"])
+                if key in last and last[key][0] != primary:
+                    then = last[key][1]
+                    da = float(np.linalg.norm(where[a["id"]] - then[a["id"]]))
+                    db = float(np.linalg.norm(where[b["id"]] - then[b["id"]]))
+                    arg, ref = (a, b) if da >= db else (b, a)
+                    rel = footprint_relation(
+                        np.asarray(arg["footprint"]), np.asarray(ref["footprint"])
+                    )[0]
+                    events.append(
+                        {
+                            "kind": "moved",
+                            "object": arg["id"],
+                            "referent": ref["id"],
+                            "relation": rel,
+                            "frame": fr.index,
+                        }
+                    )
+                last[key] = (primary, {a["id"]: where[a["id"]], b["id"]: where[b["id"]]})
+    return events
+
+
+def _object_events(frames: Sequence[FrameTruth]) -> list[dict[str, Any]]:
+    """Appearances, hidings and departures from the view."""
+    events: list[dict[str, Any]] = []
+    state: dict[int, str] = {}
+    for fr in frames:
+        for o in fr.objects:
+            i = o["id"]
+            if o["in_view"] < OUT_OF_VIEW_INSIDE:
+                now = "out of view"
+            elif o["visible_fraction"] < HIDDEN_VISIBLE:
+                now = "hidden"
+            else:
+                now = "seen"
+            before = state.get(i)
+            if before is None and fr.index > 0 and now == "seen":
+                events.append({"kind": "appeared", "object": i, "frame": fr.index})
+            elif before == "seen" and now == "out of view":
+                events.append({"kind": "out of view", "object": i, "frame": fr.index})
+            elif before == "seen" and now == "hidden":
+                ev = {"kind": "hidden", "object": i, "frame": fr.index}
+                ev["referent"] = _occluder(fr, o)
+                events.append(ev)
+            if before is not None or now == "seen":
+                state[i] = now
+    return events
+
+
+def _occluder(fr: FrameTruth, hidden: dict[str, Any]) -> int | None:
+    """The nearest other object in front of ``hidden`` (by the footprints' x overlap)."""
+    hx = np.asarray(hidden["footprint"])[:, 0]
+    best, best_d = None, np.inf
+    for o in fr.objects:
+        if o["id"] == hidden["id"] or o["centroid"][2] >= hidden["centroid"][2]:
+            continue
+        ox = np.asarray(o["footprint"])[:, 0]
+        if ox.min() < hx.max() and hx.min() < ox.max() and o["centroid"][2] < best_d:
+            best, best_d = o["id"], o["centroid"][2]
+    return best
+
+
+# --------------------------------------------------------------------------------------------
+# files
+
+
+def _write_rgb(path: Path, rgb: NDArray[np.uint8]) -> None:
+    if not cv2.imwrite(str(path), np.ascontiguousarray(rgb[:, :, ::-1])):
+        raise InputError(path, "cannot be written")
+
+
+def generate_sequence(
+    out_dir: str | PathLike[str],
+    script: str,
+    *,
+    seed: int = 0,
+    n_frames: int = 32,
+    image_size: tuple[int, int] = (640, 480),
+    progress: Callable[[int, int], Any] | None = None,
+) -> SequenceTruth:
+    """Render one scripted sequence into ``out_dir`` (replaced if it exists).
+
+    A pure function of its arguments. The frames are written into a temporary sibling folder
+    renamed into place at the end, so an interrupted call leaves nothing half-written.
+
+    Parameters
+    ----------
+    out_dir : path
+        The sequence folder.
+    script : {"slide", "appear", "hide", "pan"}
+        What happens (module docstring).
+    seed : int
+        Fixes the objects, their places and the timing.
+    n_frames : int
+        Frames (at least 8: the scripts keep still stretches before and after the change).
+    image_size : (int, int)
+        Width and height of the images.
+    progress : callable(done, total), optional
+        Called after each frame.
+
+    Returns
+    -------
+    SequenceTruth
+    """
+    if script not in _SCRIPTS:
+        raise InputError("script", f"unknown script {script!r}; choose one of {SCRIPTS}")
+    if n_frames < 8:
+        raise InputError("n_frames", f"must be at least 8, got {n_frames}")
+    out = Path(out_dir)
+    rng = np.random.default_rng([int(seed), SCRIPTS.index(script)])
+    shots = _SCRIPTS[script](rng, n_frames)
+    full = next(s for s in shots if None not in s.placements).placements
+    objects = [pl.obj for pl in full if pl is not None]
+    labels = [o.label for o in objects]
+    rig = Rig(0.0, 0.25, 0.12, 60.0, (int(image_size[0]), int(image_size[1])))
+    out.parent.mkdir(parents=True, exist_ok=True)
+    tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}-", dir=out.parent))
+    try:
+        frames = _render_all(tmp, shots, objects, rig, labels, progress)
+        events = sorted(_relation_events(frames) + _object_events(frames), key=lambda e: e["frame"])
+        data = {
+            "format": FORMAT,
+            "script": script,
+            "seed": int(seed),
+            "labels": {str(k + 1): lab for k, lab in enumerate(labels)},
+            "frames": [
+                {"frame": f.index, "pan_deg": f.pan_deg, "objects": list(f.objects)} for f in frames
+            ],
+            "events": events,
+        }
+        (tmp / "calib.json").write_text(json.dumps(rig.calibration(), indent=1) + "\n")
+        (tmp / "truth.json").write_text(json.dumps(data, indent=1) + "\n")
+        tmp.chmod(0o755)
+        if out.exists():
+            shutil.rmtree(out)
+        os.replace(tmp, out)
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+    return load_sequence(out)
+
+
+def _render_all(
+    tmp: Path,
+    shots: Sequence[_Shot],
+    objects: Sequence[CatalogueObject],
+    rig: Rig,
+    labels: Sequence[str],
+    progress: Callable[[int, int], Any] | None,
+) -> list[FrameTruth]:
+    frames = []
+    with tempfile.TemporaryDirectory(prefix="scenespeak-seq-") as meshes:
+        renderer = _Renderer(objects, Path(meshes))
+        try:
+            for k, shot in enumerate(shots):
+                cams = _cameras(rig, shot.pan_deg)
+                (img_l, seg_l), (img_r, _) = renderer.frame(shot, cams)
+                d = tmp / f"{k:04d}"
+                d.mkdir()
+                _write_rgb(d / "left.png", img_l)
+                _write_rgb(d / "right.png", img_r)
+                frames.append(_frame_truth(k, shot, cams[0], seg_l, labels))
+                if progress is not None:
+                    progress(k + 1, len(shots))
+        finally:
+            renderer.close()
+    return frames
+
+
+def load_sequence(seq_dir: str | PathLike[str]) -> SequenceTruth:
+    """Read a sequence folder written by :func:`generate_sequence`.
+
+    Raises
+    ------
+    InputError
+        If ``truth.json`` is missing or not a sequence's truth.
+    """
+    root = Path(seq_dir)
+    path = root / "truth.json"
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError as exc:
+        raise InputError(path, "missing: not a generated sequence") from exc
+    except (OSError, ValueError) as exc:
+        raise InputError(path, f"cannot be read as JSON ({exc})") from exc
+    if not isinstance(data, dict) or data.get("format") != FORMAT:
+        raise InputError(path, f"not a {FORMAT} truth file")
+    frames = tuple(
+        FrameTruth(int(f["frame"]), float(f.get("pan_deg", 0.0)), tuple(f["objects"]))
+        for f in data["frames"]
+    )
+    labels = {int(k): str(v) for k, v in data.get("labels", {}).items()}
+    return SequenceTruth(
+        root, str(data["script"]), int(data["seed"]), frames, tuple(data["events"]), labels
+    )
+
+
+def sequence_database(
+    out_dir: str | PathLike[str],
+    *,
+    image_size: tuple[int, int] = (640, 480),
+    labels: Sequence[str] | None = None,
+) -> Path:
+    """Render the training views of the catalogue objects the scripts use (or of ``labels``)
+    into ``out_dir/objects/<label>/`` (the dataset layout that
+    :func:`scenespeak.pipeline.database_from_dataset` reads); existing views are kept."""
+    out = Path(out_dir)
+    used = sorted(set(_OCCLUDERS) | set(_MOVERS)) if labels is None else sorted(set(labels))
+    for label in used:
+        d = out / "objects" / label
+        if not (d / "view_00_mask.png").exists():
+            render_training_views(_BY_LABEL[label], d, image_size=image_size)
+    return out
+
+
+def generate_sequence_set(
+    out_dir: str | PathLike[str],
+    seeds: Sequence[int],
+    *,
+    scripts: Sequence[str] = SCRIPTS,
+    n_frames: int = 32,
+    image_size: tuple[int, int] = (640, 480),
+    progress: Callable[[str], Any] | None = None,
+) -> list[SequenceTruth]:
+    """Every script with every seed, as ``out_dir/<script>_<seed>/`` (kept when present)."""
+    out = Path(out_dir)
+    done = []
+    for seed in seeds:
+        for script in scripts:
+            d = out / f"{script}_{seed}"
+            try:
+                seq = load_sequence(d)
+                if len(seq.frames) != n_frames:
+                    raise InputError(d, "other length")
+            except InputError:
+                seq = generate_sequence(
+                    d, script, seed=seed, n_frames=n_frames, image_size=image_size
+                )
+            if progress is not None:
+                progress(d.name)
+            done.append(seq)
+    return done
