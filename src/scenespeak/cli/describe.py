@@ -308,8 +308,8 @@ def _describe(left: Path, right: Path, rig: Any, db: Path, **options: Any) -> An
     import numpy as np
 
     from scenespeak.perception import plausibility
-    from scenespeak.perception.recognition import ObjectDatabase
     from scenespeak.perception.features import load_image
+    from scenespeak.perception.recognition import ObjectDatabase
     from scenespeak.pipeline import describe_scene
 
     left_img = load_image(left, gray=False)

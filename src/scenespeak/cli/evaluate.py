@@ -21,7 +21,10 @@ def evaluate_cmd(
     dataset: Annotated[Path, typer.Argument(help="A generated dataset folder.")],
     as_json: Annotated[bool, typer.Option("--json", help="Print JSON.")] = False,
     workers: Annotated[
-        int, typer.Option("--workers", min=1, max=256, help="Local Dask worker processes (1: this one; at most 256).")
+        int,
+        typer.Option(
+            "--workers", min=1, max=256, help="Local Dask worker processes (1: this one; <= 256)."
+        ),
     ] = 2,
     scheduler: Annotated[
         str | None,

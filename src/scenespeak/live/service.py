@@ -280,7 +280,7 @@ def _truthy(v: Any) -> bool:
     return str(v).strip().lower() in ("1", "true", "yes", "on")
 
 
-def create_app(
+def create_app(  # noqa: C901 (complexity 41 > 15: to be split into route modules)
     db_path: str | Path,
     *,
     calib: str | Path | None = None,

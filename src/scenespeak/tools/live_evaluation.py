@@ -135,7 +135,7 @@ def _event_matches(rep: dict[str, Any], ev: dict[str, Any], to_truth: dict[int, 
     return False
 
 
-def score_sequence(
+def score_sequence(  # noqa: C901 (complexity 18 > 15: to be split)
     seq: SequenceTruth,
     lines: Sequence[dict[str, Any]],
     *,
