@@ -16,10 +16,17 @@ Prints median wall-clock times (one process, one thread) of F0 + F2:
 The machine may be shared: medians over many repeats are printed together with the load
 average, and should be read with it.
 
+Side by side with Matsakis & Wendling's raster algorithm in C (``--mw PATH`` or the environment
+variable ``SCENESPEAK_MW_HOF``): a binary that takes ``A.pgm B.pgm directions repeats`` and prints
+``median_ms best_ms argmax_f0 argmax_f2`` for F0 then F2 of the two masks. It is not part of the
+repository (build it yourself, outside it); without it that table is skipped. Polygons are given
+to it rasterised into a square image (the size in the table), the way a segmentation would.
+
 Run::
 
-    python benchmarks/bench_forces.py            # full run (about a minute)
+    python benchmarks/bench_forces.py            # full run (a few minutes)
     python benchmarks/bench_forces.py --quick    # fewer repeats
+    python benchmarks/bench_forces.py --mw /tmp/mw/hof_raster
 """
 
 from __future__ import annotations
@@ -27,14 +34,22 @@ from __future__ import annotations
 import argparse
 import os
 import statistics
+import subprocess
+import tempfile
 import time
 from collections.abc import Callable
+from pathlib import Path
 
 import numpy as np
 from numpy.typing import NDArray
 from skimage.draw import polygon as raster_polygon
 
-from scenespeak.spatial.forces import force_histogram, force_histograms, hybrid_histogram
+from scenespeak.spatial.forces import (
+    compiled,
+    force_histogram,
+    force_histograms,
+    hybrid_histogram,
+)
 
 Array = NDArray[np.float64]
 
@@ -53,13 +68,19 @@ def star(n: int, centre: tuple[float, float], radius: float, seed: int) -> Array
     return np.column_stack([centre[0] + rad * np.cos(ang), centre[1] + rad * np.sin(ang)])
 
 
+#: The clock of every timing: wall clock by default; ``--clock cpu`` uses the process's CPU
+#: time (one thread throughout), which on a crowded machine is closer to an idle core's time.
+CLOCK: list[Callable[[], float]] = [time.perf_counter]
+
+
 def timings_ms(fn: Callable[[], object], repeat: int) -> list[float]:
     fn()  # warm-up (imports, caches)
+    clock = CLOCK[0]
     times = []
     for _ in range(repeat):
-        t0 = time.perf_counter()
+        t0 = clock()
         fn()
-        times.append(1e3 * (time.perf_counter() - t0))
+        times.append(1e3 * (clock() - t0))
     return times
 
 
@@ -133,15 +154,103 @@ def scene_pairs(directions: int = 180) -> tuple[Callable[[], object], Callable[[
     return per_pair, all_pairs
 
 
+def rasterise(polys: list[Array], size: int) -> list[NDArray[np.bool_]]:
+    """The polygons as boolean masks of a ``size`` x ``size`` image (the scene fills 90 %)."""
+    pts = np.concatenate(polys)
+    lo, hi = pts.min(axis=0), pts.max(axis=0)
+    scale = 0.9 * size / float((hi - lo).max())
+    out = []
+    for p in polys:
+        q = (p - lo) * scale + 0.05 * size
+        mask = np.zeros((size, size), bool)
+        rr, cc = raster_polygon(size - 1 - q[:, 1], q[:, 0], mask.shape)
+        mask[rr, cc] = True
+        out.append(mask)
+    return out
+
+
+def _write_pgm(path: Path, mask: NDArray[np.bool_]) -> None:
+    h, w = mask.shape
+    path.write_bytes(f"P5 {w} {h} 255\n".encode() + (mask.astype(np.uint8) * 255).tobytes())
+
+
+def mw_ms(binary: str, a: NDArray[np.bool_], b: NDArray[np.bool_], repeat: int) -> float:
+    """Median ms of the MW binary's F0 + F2 (its own timer: no process start-up counted)."""
+    with tempfile.TemporaryDirectory() as tmp:
+        pa, pb = Path(tmp) / "a.pgm", Path(tmp) / "b.pgm"
+        _write_pgm(pa, a)
+        _write_pgm(pb, b)
+        out = subprocess.run(
+            [binary, str(pa), str(pb), "180", str(repeat)],
+            capture_output=True,
+            text=True,
+            check=True,
+            timeout=3600,
+        )
+    return float(out.stdout.split()[0])
+
+
+def mw_table(binary: str, rep: int) -> None:
+    """Every case of this benchmark against the MW raster code, side by side in one run."""
+    print(
+        f"\nAgainst Matsakis & Wendling's raster algorithm in C ({binary}), F0+F2, 180 "
+        "directions, median ms of each (ours: force_histograms on the polygons or masks):\n"
+    )
+    print("| case | image | MW C (raster) | ours | ours faster by |")
+    print("| --- | ---: | ---: | ---: | ---: |")
+    cases: list[tuple[str, list[Array]]] = [
+        ("convex 30 + 30", [convex(30, (0.0, 0.0), 1.0), convex(30, (3.0, 1.0), 1.2, 0.1)]),
+        ("star 200 + 200", [star(200, (0.0, 0.0), 1.0, 2), star(200, (2.6, 0.8), 1.2, 3)]),
+    ]
+    for n in (8, 16, 60, 120, 250, 500):
+        cases.append((f"convex {n} + {n}", [convex(n, (0, 0), 1.0), convex(n, (3, 1), 1.2, 0.1)]))
+        cases.append((f"star {n} + {n}", [star(n, (0, 0), 1.0, 2), star(n, (2.6, 0.8), 1.2, 3)]))
+    for name, polys in cases:
+        for size in (256, 512):
+            ma, mb = rasterise(polys, size)
+            t_mw = mw_ms(binary, ma, mb, max(3, rep // 4))
+            t_poly = median_ms(f0_f2_shared(*polys), rep)
+            t_mask = median_ms(f0_f2_shared(ma, mb), max(3, rep // 4))
+            print(
+                f"| {name}, polygons | {size}² | {t_mw:.2f} | {t_poly:.3f} | {t_mw / t_poly:.0f}× |"
+            )
+            print(
+                f"| {name}, as masks | {size}² | {t_mw:.2f} | {t_mask:.3f} | {t_mw / t_mask:.1f}× |"
+            )
+    ma, mb = masks()
+    t_mw = mw_ms(binary, ma, mb, max(3, rep // 4))
+    t_mask = median_ms(f0_f2_shared(ma, mb), max(3, rep // 4))
+    print(
+        f"| bench masks (star 60 + blob 90) | 512² | {t_mw:.2f} | {t_mask:.3f} | "
+        f"{t_mw / t_mask:.1f}× |"
+    )
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="fewer repeats")
+    parser.add_argument(
+        "--mw",
+        default=os.environ.get("SCENESPEAK_MW_HOF"),
+        help="Matsakis & Wendling raster binary (default $SCENESPEAK_MW_HOF; skipped if absent)",
+    )
+    parser.add_argument("--clock", choices=("wall", "cpu"), default="wall")
+    parser.add_argument(
+        "--numpy", action="store_true", help="time the NumPy reference (SCENESPEAK_NO_NUMBA=1)"
+    )
+    parser.add_argument(
+        "--headline", action="store_true", help="only the first table (and the MW table)"
+    )
     args = parser.parse_args()
+    if args.clock == "cpu":
+        CLOCK[0] = time.process_time
+    if args.numpy:
+        os.environ["SCENESPEAK_NO_NUMBA"] = "1"  # read on the first histogram
     rep_small = 40 if args.quick else 200
     rep_big = 5 if args.quick else 21
 
     print(f"load average before: {' '.join(f'{x:.2f}' for x in os.getloadavg())}")
-    print(f"numpy {np.__version__}, 1 process\n")
+    print(f"numpy {np.__version__}, 1 process, compiled kernel: {compiled()}, clock {args.clock}\n")
 
     a30, b30 = convex(30, (0.0, 0.0), 1.0), convex(30, (3.0, 1.0), 1.2, 0.1)
     a200, b200 = star(200, (0.0, 0.0), 1.0, seed=2), star(200, (2.6, 0.8), 1.2, seed=3)
@@ -159,6 +268,11 @@ def main() -> None:
         shared = median_best(f0_f2_shared(a, b), rep)
         hyb = median_best(lambda a=a, b=b: hybrid_histogram(a, b), rep)
         print(f"| {name} | {two} | {shared} | {hyb} |")
+
+    if args.headline:
+        if args.mw and os.path.exists(args.mw):
+            mw_table(args.mw, rep_big)
+        return
 
     print("\nMasks: outline simplification (mask_tolerance, pixels) vs time, F0+F2 two calls:\n")
     print("| mask_tolerance | vertices (A + B) | F0+F2 |")
@@ -200,6 +314,11 @@ def main() -> None:
         f"| 10 pairs, 180 directions | {median_best(per_pair, rep_small)} | "
         f"{median_best(all_pairs, rep_small)} |"
     )
+
+    if args.mw and os.path.exists(args.mw):
+        mw_table(args.mw, rep_big)
+    else:
+        print("\n(no MW binary given: --mw PATH or SCENESPEAK_MW_HOF; that table is skipped)")
 
     print(f"\nload average after: {' '.join(f'{x:.2f}' for x in os.getloadavg())}")
 
