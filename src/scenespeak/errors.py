@@ -36,6 +36,11 @@ class InputError(ScenespeakError, ValueError):
         self.problem = problem
         super().__init__(problem if self.source is None else f"{self.source}: {problem}")
 
+    def __reduce__(self) -> tuple[type[InputError], tuple[str | None, str]]:
+        # Picklable with its two fields, so that an error raised on a Dask worker (or in a
+        # process pool) arrives on the client as the same error with the same message.
+        return (type(self), (self.source, self.problem))
+
 
 class CalibrationError(InputError):
     """A calibration file or value is invalid (missing keys, NaN, singular matrix, ...)."""

@@ -15,7 +15,7 @@ from collections.abc import Sequence
 
 import typer
 
-from scenespeak.cli import db, describe, evaluate, points, scenes  # noqa: F401  (registers)
+from scenespeak.cli import annotate, db, describe, evaluate, points, scenes  # noqa: F401
 from scenespeak.cli._app import EXIT_INPUT, app
 from scenespeak.errors import ScenespeakError
 

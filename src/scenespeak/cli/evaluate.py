@@ -20,7 +20,13 @@ from scenespeak.cli._app import (
 def evaluate_cmd(
     dataset: Annotated[Path, typer.Argument(help="A generated dataset folder.")],
     as_json: Annotated[bool, typer.Option("--json", help="Print JSON.")] = False,
-    workers: Annotated[int, typer.Option("--workers", min=1, help="Processes.")] = 2,
+    workers: Annotated[
+        int, typer.Option("--workers", min=1, help="Local Dask worker processes (1: this one).")
+    ] = 2,
+    scheduler: Annotated[
+        str | None,
+        typer.Option("--scheduler", help="An existing Dask scheduler, tcp://HOST:PORT."),
+    ] = None,
     db: Annotated[
         Path | None, typer.Option("--db", help="Object database (default: learnt).")
     ] = None,
@@ -31,7 +37,7 @@ def evaluate_cmd(
 
     progress = _progress(0, "evaluating", quiet)
     if progress is None:
-        result = evaluate(dataset, db=db, workers=workers, progress=None)
+        result = evaluate(dataset, db=db, workers=workers, progress=None, scheduler=scheduler)
     else:
         with progress:
             task = progress.add_task("describing scenes", total=None)
@@ -39,5 +45,7 @@ def evaluate_cmd(
             def advance(done: int, total: int) -> None:
                 progress.update(task, completed=done, total=total)
 
-            result = evaluate(dataset, db=db, workers=workers, progress=advance)
+            result = evaluate(
+                dataset, db=db, workers=workers, progress=advance, scheduler=scheduler
+            )
     _echo(json.dumps(result.to_dict()) if as_json else format_table(result))

@@ -36,11 +36,9 @@ from __future__ import annotations
 
 import json
 import math
-import multiprocessing
 import tempfile
 import time
 from collections.abc import Callable, Mapping, Sequence
-from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import asdict, dataclass, field
 from os import PathLike
 from pathlib import Path
@@ -570,43 +568,37 @@ def find_scenes(dataset_dir: str | PathLike[str]) -> list[Path]:
     return scenes
 
 
-def _init_worker() -> None:
-    # Each worker gets one core: OpenCV's and BLAS's own thread pools would only fight the other
-    # workers (and spinning BLAS threads are slow on a shared machine).
-    try:
-        import cv2
-
-        cv2.setNumThreads(1)
-    except ImportError:  # pragma: no cover - cv2 is a dependency
-        pass
-    try:
-        from threadpoolctl import threadpool_limits  # comes with scikit-learn
-
-        threadpool_limits(1)
-    except ImportError:  # pragma: no cover
-        pass
-
-
 def evaluate_scene(scene_dir: str, db_path: str) -> SceneScore:
     """Describe one scene folder and score it (pure apart from reading files; picklable).
 
-    This is the unit of work a process pool — or a cluster engine — runs once per scene.
     A scene the chain cannot use (a :class:`~scenespeak.errors.ScenespeakError`) is scored as
     not usable with the error kept; a broken ``truth.json`` raises.
     """
-    from scenespeak.pipeline import describe_files
+    from scenespeak.perception.database import ObjectDatabase
+
+    with ObjectDatabase.open(db_path, readonly=True) as db:
+        return _evaluate_one(scene_dir, db)
+
+
+def _evaluate_one(scene_dir: str, db: Any) -> SceneScore:
+    from scenespeak.scene_folder import describe_scene_folder
 
     scene = Path(scene_dir)
     truth = load_scene_truth(scene)
     start = time.perf_counter()
     try:
-        desc = describe_files(
-            scene / "left.png", scene / "right.png", scene / "calib.json", db_path
-        )
+        desc = describe_scene_folder(scene, db)
         pred = predicted_from_description(desc, scene.name, time.perf_counter() - start)
     except ScenespeakError as exc:
         pred = PredictedScene(scene.name, {}, {}, time.perf_counter() - start, str(exc))
     return score_scene(pred, truth)
+
+
+def evaluate_batch(scene_dirs: Sequence[str], database: Any) -> list[SceneScore]:
+    """Score a batch of scene folders: the task the engine (:mod:`scenespeak.tools.engine`)
+    runs on its workers, with the database its worker opened once (``database.get()``)."""
+    db = database.get()
+    return [_evaluate_one(scene, db) for scene in scene_dirs]
 
 
 def evaluate(
@@ -615,6 +607,7 @@ def evaluate(
     db: str | PathLike[str] | Any | None = None,
     workers: int = 2,
     progress: Callable[[int, int], Any] | None = None,
+    scheduler: str | None = None,
 ) -> EvaluationResult:
     """Run the whole chain over a folder of labelled scenes and score it: the paper's experiment.
 
@@ -627,9 +620,12 @@ def evaluate(
         The object database to label with. By default one is learnt from the dataset's
         ``objects/<label>/view_NN.png`` training views into a temporary file.
     workers : int
-        Processes (``concurrent.futures.ProcessPoolExecutor``); 1 runs in this process.
+        Worker processes of a local Dask cluster (:mod:`scenespeak.tools.engine`, one
+        OpenCV/BLAS thread each); 1 runs in this process.
     progress : callable, optional
-        Called as ``progress(done, total)`` after each scene.
+        Called as ``progress(done, total)`` as scenes finish.
+    scheduler : str, optional
+        Run on an existing Dask cluster (``tcp://HOST:PORT``) instead; ``workers`` is ignored.
 
     Returns
     -------
@@ -640,8 +636,11 @@ def evaluate(
     InputError
         No such folder, no scene in it, no training views and no ``db``, a broken truth file.
     """
+    from scenespeak.tools.engine import EngineOptions
+
     if workers < 1:
         raise InputError("workers", f"must be at least 1, got {workers}")
+    engine = EngineOptions(workers=workers, scheduler=scheduler)
     root = Path(dataset_dir)
     scenes = find_scenes(root)
     start = time.perf_counter()
@@ -658,7 +657,7 @@ def evaluate(
                 raise InputError(db_path, "no such object database")
         else:
             db_path = Path(db.path)
-        scores = _run(scenes, str(db_path), workers, progress)
+        scores = _run(scenes, db_path, engine, progress)
     return summarize(
         scores, dataset=str(root), workers=workers, wall_seconds=time.perf_counter() - start
     )
@@ -666,28 +665,19 @@ def evaluate(
 
 def _run(
     scenes: Sequence[Path],
-    db_path: str,
-    workers: int,
+    db_path: Path,
+    engine: Any,
     progress: Callable[[int, int], Any] | None,
 ) -> list[SceneScore]:
+    from scenespeak.tools.engine import run_batches
+
     total = len(scenes)
     scores: list[SceneScore] = []
-    if workers == 1 or total == 1:
-        for i, scene in enumerate(scenes, 1):
-            scores.append(evaluate_scene(str(scene), db_path))
-            if progress is not None:
-                progress(i, total)
-        return scores
-    n = min(workers, total)
-    # "spawn": fresh interpreters. Forking a parent whose OpenCV / BLAS thread pools are already
-    # running can deadlock the children.
-    context = multiprocessing.get_context("spawn")
-    with ProcessPoolExecutor(
-        max_workers=max(n, 1), mp_context=context, initializer=_init_worker
-    ) as pool:
-        futures = [pool.submit(evaluate_scene, str(s), db_path) for s in scenes]
-        for i, fut in enumerate(as_completed(futures), 1):
-            scores.append(fut.result())
-            if progress is not None:
-                progress(i, total)
+
+    def take(batch: list[SceneScore]) -> None:
+        scores.extend(batch)
+        if progress is not None:
+            progress(len(scores), total)
+
+    run_batches(evaluate_batch, [str(s) for s in scenes], engine, on_results=take, database=db_path)
     return scores
