@@ -40,8 +40,10 @@ if TYPE_CHECKING:  # pragma: no cover
 __all__ = [
     "RGBD_FILES",
     "STEREO_FILES",
+    "check_supported",
     "describe_scene_folder",
     "find_scene_folders",
+    "rgbd_supported",
     "scene_layout",
 ]
 
@@ -171,6 +173,30 @@ def _describe_stereo(
     sources["db"] = str(db)
     with ObjectDatabase.open(db, readonly=True) as opened:
         return describe_scene(left, right, rig, opened, sources=sources, **options)
+
+
+def rgbd_supported() -> bool:
+    """Whether this version can describe RGB-D scene folders."""
+    return False
+
+
+def check_supported(folders: list[Path]) -> None:
+    """Refuse, naming the folder, a dataset holding a layout this version cannot describe.
+
+    Raises
+    ------
+    InputError
+        An RGB-D scene folder while :func:`rgbd_supported` is False.
+    """
+    if rgbd_supported():
+        return
+    for folder in folders:
+        if scene_layout(folder) == "rgbd":
+            raise InputError(
+                folder,
+                "is an RGB-D scene (color.png, depth.png, intrinsics.json); this version "
+                "describes stereo scene folders only",
+            )
 
 
 def _describe_rgbd(

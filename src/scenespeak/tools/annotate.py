@@ -226,6 +226,7 @@ def annotate(
     retry_failed: bool = False,
     parquet: str | PathLike[str] | None = None,
     progress: Callable[[int, int], Any] | None = None,
+    task: Callable[[Sequence[str], DatabaseHandle], list[SceneRecord]] = annotate_batch,
 ) -> AnnotateSummary:
     """Label every ordered pair of every scene of ``dataset`` into ``out`` (JSON Lines).
 
@@ -250,6 +251,9 @@ def annotate(
         Also write the pairs (all of ``out``) as Parquet, same columns, at the end.
     progress : callable, optional
         ``progress(done, total)`` after each batch, counting scenes of this run.
+    task : callable
+        What runs on the workers per batch of scene folders (default :func:`annotate_batch`;
+        the benchmarks put a stand-in here to measure the engine alone).
 
     Returns
     -------
@@ -261,25 +265,28 @@ def annotate(
         No such dataset or no scene in it, stereo scenes and no database to use, a bad
         database, an existing ``out`` without ``resume``, a log that cannot be resumed from.
     """
-    from scenespeak.scene_folder import find_scene_folders, scene_layout
+    from scenespeak.scene_folder import check_supported, find_scene_folders, scene_layout
 
     root = Path(dataset)
     scenes = find_scene_folders(root)
     names = [s.name for s in scenes]
     if len(set(names)) != len(names):
         raise InputError(root, "two scene folders have the same name; the output could not tell")
+    check_supported(scenes)
+    if not resume:
+        ResumableJsonl.refuse_existing(out)
     options = engine or EngineOptions()
     start = time.perf_counter()
     with tempfile.TemporaryDirectory(prefix="scenespeak-annotate-") as tmp:
         db_file = _database_file(root, db, tmp)
+        if db_file is None and any(scene_layout(s) == "stereo" for s in scenes):
+            raise InputError(
+                root,
+                "stereo scenes need an object database: give --db, or put training views "
+                "in objects/<label>/view_NN.png",
+            )
         with ResumableJsonl.open(out, resume=resume, retry_failed=retry_failed) as sink:
             todo = [str(s) for s in scenes if s.name not in sink.finished]
-            if db_file is None and any(scene_layout(s) == "stereo" for s in todo):
-                raise InputError(
-                    root,
-                    "stereo scenes need an object database: give --db, or put training views "
-                    "in objects/<label>/view_NN.png",
-                )
             counts = _Counts(len(todo), progress)
 
             def take(records: list[SceneRecord]) -> None:
@@ -293,9 +300,7 @@ def annotate(
 
             if progress is not None:
                 progress(0, len(todo))
-            run_batches(
-                annotate_batch, todo, options, on_results=take, on_failure=failed, database=db_file
-            )
+            run_batches(task, todo, options, on_results=take, on_failure=failed, database=db_file)
             pairs = sink.pairs
     parquet_path = None
     if parquet is not None:

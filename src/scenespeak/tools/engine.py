@@ -331,7 +331,9 @@ def _run_here(
     local = _OpenPerThread(db_path)
     handle = DatabaseHandle(None, local)
     try:
-        for batch in _batches(items, options.batch):
+        # One item at a time: batching only saves scheduler round trips, and callers see each
+        # item finish (progress per scene).
+        for batch in _batches(items, 1):
             try:
                 results = _run_task(task, batch.items, handle)
             except Exception as exc:

@@ -156,11 +156,7 @@ class ResumableJsonl:
         if not out.parent.is_dir():
             raise InputError(out, f"the folder {str(out.parent)!r} does not exist")
         if not resume:
-            for p in (out, log):
-                if p.exists():
-                    raise InputError(
-                        p, "already exists; pass --resume to continue that run, or remove it"
-                    )
+            cls.refuse_existing(out)
             return cls(out, log, {}, 0)
         if not log.exists():
             if out.exists() and out.stat().st_size > 0:
@@ -171,6 +167,17 @@ class ResumableJsonl:
                 )
             return cls(out, log, {}, 0)
         return cls._recover(out, log, retry_failed)
+
+    @staticmethod
+    def refuse_existing(path: str | PathLike[str]) -> None:
+        """Raise :class:`InputError` if ``path`` or its scene log exists (a new run would mix
+        with it); callers check this before any long preparation."""
+        out = Path(path)
+        for p in (out, log_path(out)):
+            if p.exists():
+                raise InputError(
+                    p, "already exists; pass --resume to continue that run, or remove it"
+                )
 
     @classmethod
     def _recover(cls, out: Path, log: Path, retry_failed: bool) -> ResumableJsonl:
