@@ -15,6 +15,11 @@ Three parts (all by default; choose with ``--only``), each configuration in its 
     dataset's scenes). The workers *replay* the recorded lines of the real scenes
     (``_annotate_replay.py``) instead of describing them again, so 10,000 scenes take minutes
     and the client sees exactly the traffic of a real run. RSS is sampled every 0.1 s.
+``labels``
+    How honest the labels of the 2-worker run are against the generator's truth
+    (``truth.json``): primary direction right on pairs flagged ``ambiguous`` and not, and how
+    the flag agrees with the truth's own ambiguous count (diagonal ±20°, overlap, hidden).
+    The rule was fixed before this was first run (``tools.annotate.is_ambiguous``).
 ``overhead``
     What the engine adds per scene: the replayed task over 1,000 linked scenes in a plain loop
     (buffered writes, no Dask) against the engine in this process and on a 1-worker cluster.
@@ -350,13 +355,45 @@ def overhead(dataset: Path, db: Path, work: Path, replay: Path, batch: int) -> d
     return rows
 
 
+def labels(dataset: Path, work: Path) -> dict[str, Any]:
+    print(f"## labels against the truth ({dataset})", flush=True)
+    truth: dict[tuple[str, str, str], tuple[str, bool]] = {}
+    for scene in sorted(dataset.glob("scene_*")):
+        t = json.loads((scene / "truth.json").read_text())
+        for r in t["relations"]:
+            truth[(scene.name, r["argument"], r["referent"])] = (r["primary"], r["ambiguous"])
+    table: dict[tuple[bool, bool], list[int]] = {}
+    extra = 0
+    for line in (work / "dask2.jsonl").read_text().splitlines():
+        d = json.loads(line)
+        key = (d["scene"], d["argument"], d["referent"])
+        if key not in truth:
+            extra += 1  # a pair with an unknown object
+            continue
+        primary, t_amb = truth[key]
+        cell = table.setdefault((d["ambiguous"], t_amb), [0, 0])
+        cell[0] += d["primary"] == primary
+        cell[1] += 1
+    print("\n| flagged ambiguous | truth ambiguous | pairs | primary right |")
+    print("| --- | --- | --- | --- |")
+    for (flag, t_amb), (right, n) in sorted(table.items()):
+        print(f"| {flag} | {t_amb} | {n} | {right} ({100 * right / n:.1f} %) |")
+    for flag in (False, True):
+        right = sum(v[0] for k, v in table.items() if k[0] == flag)
+        n = sum(v[1] for k, v in table.items() if k[0] == flag)
+        if n:
+            print(f"flagged ambiguous={flag}: {right}/{n} right ({100 * right / n:.1f} %)")
+    print(f"pairs with an object not in the truth (not scored): {extra}\n", flush=True)
+    return {f"{k[0]}/{k[1]}": v for k, v in table.items()} | {"extra": extra}
+
+
 def main() -> None:
     if len(sys.argv) > 1 and sys.argv[1] == "_child":
         child_main(sys.argv[2:])
         return
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     p.add_argument("--dataset", type=Path, required=True, help="a generated dataset folder")
-    p.add_argument("--only", default="throughput,memory,overhead")
+    p.add_argument("--only", default="throughput,memory,overhead,labels")
     p.add_argument("--work", type=Path, default=Path("/tmp/scenespeak-bench-annotate"))
     p.add_argument("--batch", type=int, default=2, help="scenes per task")
     p.add_argument("--json", type=Path, help="also write every figure here")
@@ -372,12 +409,14 @@ def main() -> None:
     if "throughput" in parts:
         figures["throughput"] = throughput(a.dataset, db, a.work, a.batch)
     replay = a.work / "dask2.jsonl"
-    if parts & {"memory", "overhead"} and not replay.exists():
+    if parts & {"memory", "overhead", "labels"} and not replay.exists():
         raise SystemExit(f"run --only throughput first: {replay} is the recording to replay")
     if "memory" in parts:
         figures["memory"] = memory(a.dataset, db, a.work, replay, a.batch)
     if "overhead" in parts:
         figures["overhead"] = overhead(a.dataset, db, a.work, replay, a.batch)
+    if "labels" in parts:
+        figures["labels"] = labels(a.dataset, a.work)
     if a.json:
         a.json.write_text(json.dumps(figures, indent=1, default=str))
 

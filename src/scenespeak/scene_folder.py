@@ -54,13 +54,25 @@ RGBD_FILES = ("color.png", "depth.png", "intrinsics.json")
 
 Layout = Literal["stereo", "rgbd"]
 
+_COLOR_NAMES = ("color.png", "color.jpg", "left.png")
+_DEPTH_NAMES = ("depth.png", "depth.tif", "depth.tiff", "depth.npy")
+
+
+def _any(folder: Path, names: tuple[str, ...]) -> bool:
+    return any((folder / n).is_file() for n in names)
+
 
 def scene_layout(folder: str | PathLike[str]) -> Layout | None:
-    """``"stereo"``, ``"rgbd"`` or None (not a scene folder) from the files present."""
+    """``"stereo"``, ``"rgbd"`` or None (not a scene folder) from the files present.
+
+    Stereo wins when both are there (a generated scene folder also holds its left camera's
+    depth). The RGB-D colour image may also be ``color.jpg`` or ``left.png``, the depth
+    ``depth.tif``/``.tiff``/``.npy`` (the readers of ``perception.depth``).
+    """
     p = Path(folder)
     if all((p / f).is_file() for f in STEREO_FILES):
         return "stereo"
-    if all((p / f).is_file() for f in RGBD_FILES):
+    if _any(p, _COLOR_NAMES) and _any(p, _DEPTH_NAMES) and (p / "intrinsics.json").is_file():
         return "rgbd"
     return None
 
@@ -176,8 +188,11 @@ def _describe_stereo(
 
 
 def rgbd_supported() -> bool:
-    """Whether this version can describe RGB-D scene folders."""
-    return False
+    """Whether this version can describe RGB-D scene folders (the RGB-D path of issue 11,
+    ``scenespeak.inputs``, is installed)."""
+    import importlib.util
+
+    return importlib.util.find_spec("scenespeak.inputs") is not None
 
 
 def check_supported(folders: list[Path]) -> None:
@@ -201,10 +216,20 @@ def check_supported(folders: list[Path]) -> None:
 
 def _describe_rgbd(
     folder: Path, db: ObjectDatabase | str | PathLike[str] | None, options: dict[str, Any]
-) -> SceneDescription:
-    """The RGB-D layout: the hook for the RGB-D path of issue 11 (not in this version yet)."""
-    raise InputError(
-        folder,
-        "is an RGB-D scene (color.png, depth.png, intrinsics.json); this version describes "
-        "stereo scene folders only",
-    )
+) -> Any:
+    """The RGB-D layout: the RGB-D path's own folder reader (``scenespeak.inputs``, issue 11).
+
+    With ``instances.png`` + ``labels.json`` in the folder no database is needed; otherwise
+    the objects are recognised with ``db`` (its file: the RGB-D path opens it itself).
+    """
+    if not rgbd_supported():
+        raise InputError(
+            folder,
+            "is an RGB-D scene (color.png, depth.png, intrinsics.json); this version "
+            "describes stereo scene folders only",
+        )
+    from scenespeak.inputs import describe_scene_folder as describe_any  # type: ignore[import-not-found,unused-ignore]
+    from scenespeak.perception.database import ObjectDatabase
+
+    db_file = db.path if isinstance(db, ObjectDatabase) else db
+    return describe_any(folder, db_file, layout="rgbd")

@@ -27,6 +27,7 @@ import pytest
 
 from scenespeak.cli import main
 from scenespeak.errors import InputError
+from scenespeak.scene_folder import rgbd_supported
 from scenespeak.tools.annotate import annotate, is_ambiguous
 from scenespeak.tools.engine import EngineOptions, run_batches
 from scenespeak.tools.output import log_path
@@ -212,7 +213,6 @@ def test_cli_annotate_and_its_bad_input(
     cases = [
         (args, "already exists; pass --resume"),
         (["annotate", str(tmp_path / "nope"), "--out", str(tmp_path / "x.jsonl")], "not a folder"),
-        (["annotate", str(rgbd), "--out", str(tmp_path / "y.jsonl")], "cam_000: is an RGB-D"),
         ([*args[:3], str(tmp_path / "z.jsonl")], "stereo scenes need an object database"),
         ([*args[:3], str(tmp_path / "w.jsonl"), "--db", str(out)], "not a scenespeak object"),
         ([*args, "--retry-failed"], "only makes sense with --resume"),
@@ -221,6 +221,15 @@ def test_cli_annotate_and_its_bad_input(
         code, _, err = _cli(case, capsys)
         assert code == 2 and needle in err, (case, err)
         assert len(err.strip().splitlines()) == 1 and "Traceback" not in err
+    # RGB-D folders: refused with one line naming the folder while this version has no RGB-D
+    # path; with it, an unreadable RGB-D scene is recorded with its error like any other.
+    rgbd_out = tmp_path / "y.jsonl"
+    code, _, err = _cli(["annotate", str(rgbd), "--out", str(rgbd_out)], capsys)
+    if rgbd_supported():
+        assert code == 0 and "0 described, 1 failed" in err, err
+        assert "cam_000" in str(_log(rgbd_out)["cam_000"]["error"])
+    else:
+        assert code == 2 and "cam_000: is an RGB-D scene" in err and len(err.splitlines()) == 1
     # The resumed run has nothing left to do and changes nothing.
     before = out.read_bytes()
     code, _, err = _cli([*args, "--resume"], capsys)
