@@ -300,7 +300,10 @@ def annotate(
 
             if progress is not None:
                 progress(0, len(todo))
-            run_batches(task, todo, options, on_results=take, on_failure=failed, database=db_file)
+            if todo:  # nothing left (a finished run resumed): no cluster to start
+                run_batches(
+                    task, todo, options, on_results=take, on_failure=failed, database=db_file
+                )
             pairs = sink.pairs
     parquet_path = None
     if parquet is not None:

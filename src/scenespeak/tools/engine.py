@@ -261,7 +261,7 @@ def open_client(options: EngineOptions) -> Iterator[Client]:
             n_workers=options.workers,
             threads_per_worker=1,
             processes=True,
-            dashboard_address=None,  # no web server: the machine may be shared
+            dashboard_address=":0",  # a free port (8787 may be taken on a shared machine)
             silence_logs=logging.ERROR,
         ) as cluster,
         Client(cluster) as client,
