@@ -17,15 +17,34 @@ import pytest
 SRC = Path(__file__).resolve().parents[2] / "src" / "scenespeak"
 
 #: room → the rooms of scenespeak it may import (itself always).
+_BASE = {"errors", "limits", "cleantext", "safeio"}
+#: The composition rooms: the stereo pipeline and the other input forms (RGB-D, masks, folders).
+_COMPOSE = {"pipeline", "pipeline_rgbd", "inputs", "scene_folder"}
 ALLOWED: dict[str, set[str]] = {
+    # the base: errors and the limits/safe readers every reader uses (issue 12)
     "errors": set(),
-    "contract": set(),
-    "geometry": {"errors"},
-    "spatial": {"errors", "geometry", "contract"},
-    "perception": {"errors", "geometry", "contract"},
-    "pipeline": {"errors", "geometry", "contract", "perception", "spatial"},
-    "tools": {"errors", "geometry", "contract", "perception", "spatial", "pipeline"},
-    "cli": {"errors", "geometry", "contract", "perception", "spatial", "pipeline", "tools"},
+    "limits": {"errors"},
+    "cleantext": {"errors", "limits"},
+    "safeio": {"errors", "limits", "cleantext"},
+    "contract": {"errors"},
+    "geometry": set(_BASE),
+    "spatial": _BASE | {"geometry", "contract"},
+    "perception": _BASE | {"geometry", "contract"},
+    **{
+        room: _BASE | _COMPOSE | {"geometry", "contract", "perception", "spatial"}
+        for room in _COMPOSE
+    },
+    # streams and the service compose the pipelines (issue 14)
+    "live": _BASE | _COMPOSE | {"geometry", "contract", "perception", "spatial"},
+    "tools": _BASE | _COMPOSE | {"geometry", "contract", "perception", "spatial", "live"},
+    "cli": _BASE | _COMPOSE | {"geometry", "contract", "perception", "spatial", "tools", "live"},
+}
+#: Known breaks of the layering, each to be removed by moving the module (the lead's note):
+#: (module path, imported room) → why it is still there.
+KNOWN_BREAKS: dict[tuple[str, str], str] = {
+    ("perception/tracking.py", "pipeline"): "the tracker runs the full chain; belongs in live/",
+    ("tools/fuzz/runner.py", "cli"): "the fuzzing runner drives the CLI in-process as a user",
+    ("tools/rgbd_eval.py", "cli"): "scores the RGB-D forms through the CLI as a user runs them",
 }
 #: Modules outside the rooms: the package's root and its compatibility aliases.
 ROOT_MODULES = {"__init__", "__main__", "forces", "language"}
@@ -75,7 +94,10 @@ def test_each_room_imports_only_the_rooms_below(path: Path) -> None:
     bad = sorted(
         m
         for m in _imports(path)
-        if (r := _target_room(m)) is not None and r != room and r not in ALLOWED[room]
+        if (r := _target_room(m)) is not None
+        and r != room
+        and r not in ALLOWED[room]
+        and (path.relative_to(SRC).as_posix(), r) not in KNOWN_BREAKS
     )
     assert not bad, f"{room} may import only {sorted(ALLOWED[room])}; {path.name} imports {bad}"
 
@@ -89,7 +111,13 @@ def test_the_contract_imports_only_numpy() -> None:
         elif isinstance(node, ast.ImportFrom) and not node.level:
             names.add((node.module or "").split(".")[0])
     stdlib = set(sys.stdlib_module_names) | {"__future__"}
-    assert names - stdlib <= {"numpy"}, names - stdlib
+    assert names - stdlib <= {"numpy", "scenespeak"}, names - stdlib
+    ours = {
+        node.module
+        for node in ast.walk(tree)
+        if isinstance(node, ast.ImportFrom) and (node.module or "").startswith("scenespeak")
+    }
+    assert ours <= {"scenespeak.errors"}, ours
 
 
 def test_the_spatial_half_runs_without_perception() -> None:
