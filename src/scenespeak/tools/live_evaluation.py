@@ -137,6 +137,17 @@ def _event_matches(rep: dict[str, Any], ev: dict[str, Any], to_truth: dict[int, 
     return False
 
 
+def _where_nothing_changed(
+    seq: SequenceTruth, events: Sequence[dict[str, Any]], window: int
+) -> list[dict[str, Any]]:
+    """The events with nothing moving, appearing or leaving in the ``window`` frames before."""
+    return [
+        r
+        for r in events
+        if all(_static(seq, k) for k in range(max(1, r["frame"] - window), r["frame"] + 1))
+    ]
+
+
 def score_sequence(  # noqa: C901 (complexity 18 > 15: to be split)
     seq: SequenceTruth,
     lines: Sequence[dict[str, Any]],
@@ -198,11 +209,7 @@ def score_sequence(  # noqa: C901 (complexity 18 > 15: to be split)
     false = [r for i, r in enumerate(reported_events) if i not in explained]
     # a false event "where nothing changed": no object moved, appeared or left in the frames
     # before it (``window`` of them)
-    still = [
-        r
-        for r in false
-        if all(_static(seq, k) for k in range(max(1, r["frame"] - window), r["frame"] + 1))
-    ]
+    still = _where_nothing_changed(seq, false, window)
     return SequenceScore(
         seq.root.name,
         id_n,
