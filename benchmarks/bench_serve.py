@@ -1,6 +1,7 @@
 """The scene service under load, from a client on 127.0.0.1.
 
-Starts ``scenespeak serve`` as its own process on 127.0.0.1 (a free port), then:
+Starts ``scenespeak serve`` (without ``--calib``: each request sends its calibration) as its
+own process on 127.0.0.1 (a free port), then:
 
 1. 200 ``POST /api/describe`` requests, ``--concurrency`` (4) at a time, over four distinct
    640×480 pairs of a rendered sequence (``benchmarks/livecache.py``); every response is
@@ -64,7 +65,7 @@ def main(argv: list[str] | None = None) -> int:
     port = free_port()
     base = f"http://127.0.0.1:{port}"
     server = subprocess.Popen(
-        [sys.executable, "-m", "scenespeak", "serve", "--db", str(db), "--calib", str(seq.calib),
+        [sys.executable, "-m", "scenespeak", "serve", "--db", str(db),
          "--port", str(port), "--workers", str(args.workers)],
     )  # fmt: skip
     try:
@@ -78,8 +79,9 @@ def main(argv: list[str] | None = None) -> int:
             if time.monotonic() > deadline or server.poll() is not None:
                 raise SystemExit("the server did not start")
             time.sleep(0.2)
-        bodies = [{"left": ("left.png", a.read_bytes()), "right": ("right.png", b.read_bytes())}
-                  for a, b in inputs]  # fmt: skip
+        calib = ("calib.json", seq.calib.read_bytes())
+        bodies = [{"left": ("left.png", a.read_bytes()), "right": ("right.png", b.read_bytes()),
+                   "calib": calib} for a, b in inputs]  # fmt: skip
 
         def one(i: int) -> tuple[int, float, str]:
             k = i % len(inputs)

@@ -96,8 +96,13 @@ def send(client: Any, base: str, kwargs: dict[str, Any]) -> tuple[int, str]:
 
 
 def malformed_requests(left: Path, right: Path, calib: Path) -> list[tuple[str, dict[str, Any]]]:
-    """Fifty bad requests as keyword arguments of ``httpx.Client.request`` (name, kwargs)."""
+    """Fifty bad requests as keyword arguments of ``httpx.Client.request`` (name, kwargs), for a
+    server started without ``--calib`` (one case sends no calibration)."""
     L, R, C = left.read_bytes(), right.read_bytes(), calib.read_bytes()
+    h0, w0 = cv2.imread(str(left)).shape[:2]
+    wrong_size = (
+        f'{{"baseline": 0.12, "hfov_deg": 60, "image_size": [{2 * w0}, {2 * h0}]}}'.encode()
+    )
     small = cv2.imencode(".png", np.full((40, 60, 3), 128, np.uint8))[1].tobytes()
     flat = cv2.imencode(".png", np.full((240, 320, 3), 128, np.uint8))[1].tobytes()
     jpeg_l = cv2.imencode(".jpg", cv2.imread(str(left)))[1].tobytes()
@@ -125,7 +130,7 @@ def malformed_requests(left: Path, right: Path, calib: Path) -> list[tuple[str, 
         "calib-garbage": b"{not json",
         "calib-nan": b'{"baseline": NaN, "hfov_deg": 60, "image_size": [320, 240]}',
         "calib-negative-baseline": b'{"baseline": -1, "hfov_deg": 60, "image_size": [320, 240]}',
-        "calib-wrong-size": b'{"baseline": 0.12, "hfov_deg": 60, "image_size": [640, 480]}',
+        "calib-wrong-size": wrong_size,
         "calib-fov-180": b'{"baseline": 0.12, "hfov_deg": 180, "image_size": [320, 240]}',
         "calib-empty": b"",
         "calib-list": b"[1, 2, 3]",

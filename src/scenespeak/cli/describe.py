@@ -285,29 +285,6 @@ def _describe(left: Path, right: Path, rig: Any, db: Path, **options: Any) -> An
     import numpy as np
 
     from scenespeak.perception import plausibility
-    from scenespeak.perception.database import ObjectDatabase
-    from scenespeak.perception.features import load_image
-    from scenespeak.pipeline import describe_scene
-
-    left_img = load_image(left, gray=False)
-    right_img = load_image(right, gray=False)
-    plausibility.check_pair_order(left_img, right_img, rig, names=(str(left), str(right)))
-    sources = {"left": str(left), "right": str(right), "calib": rig.source, "db": str(db)}
-    with ObjectDatabase.open(db, readonly=True) as database:
-        description = describe_scene(left_img, right_img, rig, database, sources=sources, **options)
-    z = np.array([o["centroid"][2] for o in description.to_dict()["objects"] if o.get("centroid")])
-    if len(z):
-        fx = float(rig.K_left[0, 0])
-        with np.errstate(divide="ignore"):
-            plausibility.check_depths(z, fx * rig.baseline / z, rig.source, min_points=1)
-    return description
-
-
-def _describe(left: Path, right: Path, rig: Any, db: Path, **options: Any) -> Any:
-    """The pipeline on files, with the plausibility checks of ``docs/trust.md``."""
-    import numpy as np
-
-    from scenespeak.perception import plausibility
     from scenespeak.perception.features import load_image
     from scenespeak.perception.recognition import ObjectDatabase
     from scenespeak.pipeline import describe_scene

@@ -164,7 +164,7 @@ def load_image(path: str | PathLike[str], *, gray: bool = True) -> NDArray[np.ui
     if image.ndim < 2 or min(image.shape[:2]) < 1:
         raise ImageError(p, f"the image has no pixels (shape {image.shape})")
     if not gray:
-        image = cv2.cvtColor(image, cv2.COLOR_BGR2RGB)
+        image = cv2.cvtColor(np.asarray(image, dtype=np.uint8), cv2.COLOR_BGR2RGB)
     return np.ascontiguousarray(image, dtype=np.uint8)
 
 

@@ -79,8 +79,8 @@ def swapped(rig: StereoRig) -> StereoRig:
     does both). ``up`` is turned into the new left camera's frame.
 
     >>> from scenespeak.perception.calibration import rig_from_short
-    >>> swapped(rig_from_short(0.12, 60.0, (640, 480))).T.tolist()
-    [0.12, -0.0, -0.0]
+    >>> (swapped(rig_from_short(0.12, 60.0, (640, 480))).T + 0.0).tolist()  # + 0.0: no -0.0
+    [0.12, 0.0, 0.0]
     """
     R = np.asarray(rig.R)
     T = np.asarray(rig.T)

@@ -655,7 +655,7 @@ def _plain_text(fig: Figure) -> Figure:
     from matplotlib.text import Text
 
     for t in fig.findobj(Text):
-        t.set_parse_math(False)  # type: ignore[attr-defined]
+        t.set_parse_math(False)
     return fig
 
 

@@ -11,7 +11,8 @@ Three measures, each against the truth of every frame (``docs/live.md``):
 - **events**: a scripted event is *reported* when the stream said an event of the same kind
   about the same objects (for ``moved``: the same pair and direction, either way round)
   within ``window`` frames of the scripted frame; a reported event no scripted event explains
-  is a *false event*.
+  is a *false event*; one with nothing moving, appearing or leaving in the ``window`` frames
+  before it is a false event *where nothing changed*.
 """
 
 from __future__ import annotations
@@ -52,6 +53,7 @@ class SequenceScore:
     frames: int = 0
     seconds: float = 0.0
     recognised: int = 0
+    false_static: int = 0
 
 
 def run_sequence(
@@ -135,6 +137,17 @@ def _event_matches(rep: dict[str, Any], ev: dict[str, Any], to_truth: dict[int, 
     return False
 
 
+def _where_nothing_changed(
+    seq: SequenceTruth, events: Sequence[dict[str, Any]], window: int
+) -> list[dict[str, Any]]:
+    """The events with nothing moving, appearing or leaving in the ``window`` frames before."""
+    return [
+        r
+        for r in events
+        if all(_static(seq, k) for k in range(max(1, r["frame"] - window), r["frame"] + 1))
+    ]
+
+
 def score_sequence(  # noqa: C901 (complexity 18 > 15: to be split)
     seq: SequenceTruth,
     lines: Sequence[dict[str, Any]],
@@ -194,6 +207,9 @@ def score_sequence(  # noqa: C901 (complexity 18 > 15: to be split)
             explained.add(hit)
             delays.append(int(reported_events[hit]["frame"] - ev["frame"]))
     false = [r for i, r in enumerate(reported_events) if i not in explained]
+    # a false event "where nothing changed": no object moved, appeared or left in the frames
+    # before it (``window`` of them)
+    still = _where_nothing_changed(seq, false, window)
     return SequenceScore(
         seq.root.name,
         id_n,
@@ -210,6 +226,7 @@ def score_sequence(  # noqa: C901 (complexity 18 > 15: to be split)
         len(lines),
         0.0,
         sum(1 for ln in lines if ln["recognised"]),
+        len(still),
     )
 
 
@@ -231,6 +248,7 @@ def summarize(scores: Sequence[SequenceScore]) -> dict[str, Any]:
         "scripted_events": scripted,
         "reported_in_window": reported,
         "false_events": sum(s.false_events for s in scores),
+        "false_events_where_nothing_changed": sum(s.false_static for s in scores),
         "delays": sorted(d for s in scores for d in s.delays),
         "recognised_frames": sum(s.recognised for s in scores),
     }
