@@ -110,7 +110,7 @@ def test_an_unrecognised_card_becomes_an_unknown_object(card_db: Path) -> None:
     assert "chelsea" in labels and "camera" not in labels
     unknown = [o for o in desc.objects if o.label.startswith("unknown object")]
     assert len(unknown) == 1  # the wall 4 m away is background, not an object
-    assert unknown[0].source == "clustered"
+    assert unknown[0].source == "segment"  # geometry first: an unnamed segment
     assert unknown[0].plane_centroid == pytest.approx([-0.3, 1.6], abs=0.03)
     rel = desc.relation("unknown object 1", "chelsea")
     assert (rel.primary, rel.secondary) == ("behind", "left")  # 0.6 m behind, 0.5 m left

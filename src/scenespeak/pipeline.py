@@ -113,6 +113,9 @@ class PipelineOptions:
         Bins of the force histograms.
     summary : bool
         Also write a short scene summary (``language.summarize_scene``).
+    geometry : bool
+        Geometry first (``perception.scene_regions``): segments standing on the support plane,
+        named by keypoints, depth agreeing with the object's own (False: the carried outlines).
     """
 
     ratio: float = 0.6
@@ -133,6 +136,7 @@ class PipelineOptions:
     eps: float = 0.05
     directions: int = 180
     summary: bool = True
+    geometry: bool = True
 
 
 @dataclass(frozen=True, eq=False)
@@ -266,6 +270,8 @@ class SceneDescription:
             objects.append(
                 {
                     "label": o.label,
+                    "name": o.key,
+                    "confidence": round(float(o.confidence), 4),
                     "points": int(o.n_points),
                     "centroid": [float(v) for v in o.centroid],
                     "hull": [[float(x), float(y)] for x, y in o.hull],
@@ -349,12 +355,12 @@ def _relate_all(objects: tuple[SceneObject, ...], directions: int) -> list[PairR
 
     found = relate_objects(
         [o.hull for o in objects],
-        names=[o.label for o in objects],
+        names=[o.key for o in objects],
         heights=[o.heights for o in objects],
         directions=directions,
     )
     relations = [PairRelation(rel, hist.f0, hist.f2) for rel, hist in found]
-    order = {o.label: k for k, o in enumerate(objects)}
+    order = {o.key: k for k, o in enumerate(objects)}
     relations.sort(key=lambda r: (order[r.argument], order[r.referent]))
     return relations
 
@@ -444,8 +450,20 @@ def describe_scene(
         say("stereo")
         with _timed(timings, "wait"):
             feats_r, result = future_st.result()
+        id_to_label = {o.id: o.label for o in db.list_objects()} if opts.geometry else {}
         return _after_stereo(
-            left, right, opts, src, timings, say, feats_l, feats_r, result, labelling, lname
+            left,
+            right,
+            opts,
+            src,
+            timings,
+            say,
+            feats_l,
+            feats_r,
+            result,
+            labelling,
+            lname,
+            id_to_label,
         )
 
 
@@ -510,6 +528,7 @@ def _after_stereo(
     result: Any,
     labelling: Any,
     lname: str,
+    id_to_label: dict[int, str] | None = None,
 ) -> SceneDescription:
     """Stages 3-5 of :func:`describe_scene` once the labels and the stereo points are known."""
     rig = result.rect.rig
@@ -521,7 +540,12 @@ def _after_stereo(
 
     say("objects")
     with _timed(timings, "objects"):
-        objects, skipped = _objects(left, right, result, point_labels, labelling, opts)
+        if _use_geometry(opts, result):
+            objects, skipped = _geometry_objects(
+                left.shape[:2], result, labelling, opts, id_to_label
+            )
+        else:
+            objects, skipped = _objects(left, right, result, point_labels, labelling, opts)
 
     say("relations")
     with _timed(timings, "relations"):
@@ -532,7 +556,7 @@ def _after_stereo(
 
             summary = summarize_scene(
                 [r.relation for r in relations],
-                centroids={o.label: o.plane_centroid for o in objects},
+                centroids={o.key: o.plane_centroid for o in objects},
             )
 
     return SceneDescription(
@@ -623,6 +647,31 @@ def _objects(
         objects.extend(extra)
         skipped.extend(extra_skipped)
     return tuple(objects), skipped
+
+
+def _use_geometry(opts: PipelineOptions, result: Any) -> bool:
+    """Geometry first needs the dense map on the input grid (no resampling rectification)."""
+    dense = opts.dense and result.dense is not None
+    return bool(opts.geometry and dense and not result.rect.needs_resampling)
+
+
+def _geometry_objects(
+    shape: tuple[int, int],
+    result: Any,
+    labelling: Any,
+    opts: PipelineOptions,
+    id_to_label: dict[int, str] | None,
+) -> tuple[tuple[SceneObject, ...], list[Skipped]]:
+    """Geometry first (``perception.scene_regions``): named segments, votes, unknown segments."""
+    from scenespeak.perception.scene_regions import SceneInputs, objects_from_regions
+
+    xy = np.asarray(result.features_left.xy, dtype=np.float64)
+    up = np.asarray(result.rect.rig.up, dtype=np.float64)
+    inputs = SceneInputs(shape, result.dense, result.points, labelling, xy, up, id_to_label or {})
+    # the outlier radius is scaled to each object (objects.scaled_radius), not opts.radius
+    kw = {"outliers": opts.outliers, "eps": opts.eps, "min_points": opts.min_points}
+    objs, skipped, _geo = objects_from_regions(inputs, object_options=kw)
+    return tuple(objs), skipped
 
 
 def _visible_parts(
@@ -763,7 +812,18 @@ def database_from_dataset(
             if not views:
                 continue
             masks = [v.with_name(v.stem + "_mask.png") for v in views]
-            use_masks = masks if all(m.exists() for m in masks) else None
+            use_masks: Any = masks if all(m.exists() for m in masks) else None
+            if use_masks is None:
+                use_masks = [_auto_mask(v) for v in views]
             database.add_object(folder.name, views, masks=use_masks, replace=replace)
             labels.append(folder.name)
     return labels
+
+
+def _auto_mask(path: Path) -> Any:
+    from scenespeak.perception.features import load_image
+    from scenespeak.perception.segmentation import object_mask
+
+    img = load_image(path, gray=False)
+    feats = detect(to_gray(img))
+    return object_mask(img, feats.xy)

@@ -58,8 +58,9 @@ def points_cmd(
     )
     if swap:
         left, right = right, left
-    left_img = load_image(left)
-    right_img = load_image(right)
+    # colour, as describe reads them: one path (the dense check of the matches uses colour)
+    left_img = load_image(left, gray=False)
+    right_img = load_image(right, gray=False)
     with _status("matching the stereo pair", quiet):
         plausibility.check_pair_order(left_img, right_img, rig, names=(str(left), str(right)))
         points = _stereo_points(

@@ -40,10 +40,20 @@ def scenes_generate(
             "camera gives it (Z^2 noise, quantisation, edge holes, flying pixels).",
         ),
     ] = False,
+    config: Annotated[
+        str,
+        typer.Option(
+            "--config",
+            help="default, tuning or validation (12 objects learnt without masks, repeated "
+            "instances, distractors, level and pitched rigs; docs/scenes.md).",
+        ),
+    ] = "default",
     quiet: QuietOpt = False,
 ) -> None:
     """Render stereo scenes of textured objects with their ground truth (and RGB-D views)."""
-    _generate(out, n, seed=seed, pitched=pitched, quiet=quiet, depth_noise=depth_noise)
+    _generate(
+        out, n, seed=seed, pitched=pitched, quiet=quiet, depth_noise=depth_noise, config=config
+    )
     _echo(f"wrote {n} scene(s) to {out}")
 
 
@@ -53,7 +63,14 @@ def _check_out(out: Path) -> None:
 
 
 def _generate(
-    out: Path, n: int, *, seed: int, pitched: bool, quiet: bool, depth_noise: bool = False
+    out: Path,
+    n: int,
+    *,
+    seed: int,
+    pitched: bool,
+    quiet: bool,
+    depth_noise: bool = False,
+    config: str = "default",
 ) -> Any:
     from scenespeak import limits
     from scenespeak.tools.scenes import generate_dataset
@@ -65,7 +82,13 @@ def _generate(
     progress = _progress(n, "rendering", quiet)
     if progress is None:
         return generate_dataset(
-            out, n, seed=seed, pitched=pitched, progress=None, depth_noise=depth_noise
+            out,
+            n,
+            seed=seed,
+            pitched=pitched,
+            progress=None,
+            depth_noise=depth_noise,
+            config=config,
         )
     with progress:
         task = progress.add_task("rendering", total=None)
@@ -74,7 +97,13 @@ def _generate(
             progress.update(task, completed=done, total=total)
 
         return generate_dataset(
-            out, n, seed=seed, pitched=pitched, progress=advance, depth_noise=depth_noise
+            out,
+            n,
+            seed=seed,
+            pitched=pitched,
+            progress=advance,
+            depth_noise=depth_noise,
+            config=config,
         )
 
 

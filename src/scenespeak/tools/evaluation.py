@@ -46,8 +46,28 @@ from typing import Any
 import numpy as np
 
 from scenespeak.errors import InputError, ScenespeakError
+from scenespeak.tools.evaluation_match import (
+    MATCH_GATE_M,
+    is_known,
+    match_objects,
+    object_detail,
+    tally_relations,
+    translate_relations,
+    unmatched,
+)
+from scenespeak.tools.evaluation_tables import BANDS, breakdown, breakdown_table, found_by_label
+from scenespeak.tools.evaluation_truth import (
+    PredictedScene,
+    SceneTruth,
+    TruthObject,
+    TruthRelation,
+    load_scene_truth,
+    predicted_from_description,
+)
 
 __all__ = [
+    "BANDS",
+    "MATCH_GATE_M",
     "PAPER",
     "EvaluationResult",
     "PredictedScene",
@@ -59,6 +79,7 @@ __all__ = [
     "find_scenes",
     "format_table",
     "load_scene_truth",
+    "match_objects",
     "predicted_from_description",
     "score_scene",
     "summarize",
@@ -72,145 +93,6 @@ PAPER: Mapping[str, Any] = {
 }
 
 DIRECTIONS = ("left", "right", "front", "behind")
-
-
-# --------------------------------------------------------------------------------------------
-# Ground truth and predictions
-
-
-@dataclass(frozen=True)
-class TruthObject:
-    """One object of the ground truth: its label and the centre of its volume (metres)."""
-
-    label: str
-    centroid: tuple[float, float, float]
-
-
-@dataclass(frozen=True)
-class TruthRelation:
-    """The true primary direction of ``argument`` relative to ``referent``.
-
-    ``ambiguous`` marks pairs whose true direction lies near a diagonal, where either
-    neighbouring direction is a fair answer; they are counted apart.
-    """
-
-    argument: str
-    referent: str
-    primary: str
-    ambiguous: bool = False
-    tags: tuple[str, ...] = ()  # centroid_rule.TAGS: "elongated", "close", "partly hidden"
-
-
-@dataclass(frozen=True)
-class SceneTruth:
-    """Everything the evaluation needs from one ``truth.json``."""
-
-    name: str
-    objects: tuple[TruthObject, ...]
-    relations: tuple[TruthRelation, ...]
-
-
-@dataclass(frozen=True)
-class PredictedScene:
-    """What the chain said about one scene, reduced to what is scored.
-
-    Attributes
-    ----------
-    name : str
-        Scene name.
-    objects : mapping
-        ``label -> centroid (X, Y, Z)`` of every described object (one with a hull).
-    relations : mapping
-        ``(argument, referent) -> primary`` of every described ordered pair.
-    seconds : float
-        Wall-clock time the chain took on this scene.
-    error : str or None
-        Why the scene could not be processed at all (then nothing was described).
-    """
-
-    name: str
-    objects: Mapping[str, tuple[float, float, float]]
-    relations: Mapping[tuple[str, str], str]
-    seconds: float = 0.0
-    error: str | None = None
-    #: ``(argument, referent) -> primary`` by the centroid-vector rule (``centroid_rule``).
-    centroid_relations: Mapping[tuple[str, str], str] = field(default_factory=dict)
-
-
-def _vec3(value: Any, where: str) -> tuple[float, float, float]:
-    try:
-        arr = np.asarray(value, dtype=np.float64).ravel()
-    except (TypeError, ValueError):
-        raise InputError(where, f"expected three numbers [X, Y, Z], got {value!r:.60}") from None
-    if arr.shape != (3,) or not np.isfinite(arr).all():
-        raise InputError(where, f"expected three finite numbers [X, Y, Z], got {value!r:.60}")
-    return (float(arr[0]), float(arr[1]), float(arr[2]))
-
-
-def load_scene_truth(scene_dir: str | PathLike[str]) -> SceneTruth:
-    """Read ``scene_dir/truth.json`` (format: ``docs/evaluation.md``).
-
-    Raises
-    ------
-    InputError
-        If the file is missing, not JSON, or lacks ``objects`` with ``label`` and ``centroid``.
-    """
-    from scenespeak.safeio import load_json, read_text
-
-    path = Path(scene_dir) / "truth.json"
-    if not path.exists() and not path.is_symlink():
-        raise InputError(path, "missing: every labelled scene needs a truth.json")
-    data = load_json(read_text(path, what="truth.json file"), path)
-    if not isinstance(data, Mapping) or not isinstance(data.get("objects"), list):
-        raise InputError(path, 'expected {"objects": [...], "relations": [...]}')
-    try:
-        objects = tuple(
-            TruthObject(str(o["label"]), _vec3(o["centroid"], f"{path}: {o['label']}"))
-            for o in data["objects"]
-        )
-        by_label = {str(o["label"]): o for o in data["objects"]}
-        relations = tuple(
-            TruthRelation(
-                str(r["argument"]),
-                str(r["referent"]),
-                str(r["primary"]),
-                bool(r.get("ambiguous", False)),
-                _tags(by_label, r),
-            )
-            for r in data.get("relations", [])
-        )
-    except (KeyError, TypeError) as exc:
-        raise InputError(path, f"an object or relation lacks the field {exc}") from exc
-    except InputError as exc:
-        if exc.source is not None and str(path) in exc.source:
-            raise
-        raise InputError(path, exc.problem if exc.source is None else str(exc)) from None
-    return SceneTruth(Path(scene_dir).name, objects, relations)
-
-
-def _tags(objects: Mapping[str, Any], rel: Mapping[str, Any]) -> tuple[str, ...]:
-    from scenespeak.tools.centroid_rule import pair_tags
-
-    a, b = objects.get(str(rel["argument"])), objects.get(str(rel["referent"]))
-    return () if a is None or b is None else pair_tags(a, b, rel.get("reasons", ()))
-
-
-def predicted_from_description(description: Any, name: str, seconds: float = 0.0) -> PredictedScene:
-    """Reduce a :class:`~scenespeak.pipeline.SceneDescription` (or its ``to_dict()``)."""
-    from scenespeak.tools.centroid_rule import centroid_primary
-
-    d = description if isinstance(description, Mapping) else description.to_dict()
-    objects = {str(o["label"]): _vec3(o["centroid"], str(o["label"])) for o in d["objects"]}
-    relations = {
-        (str(r["argument"]), str(r["referent"])): str(r["primary"]) for r in d["relations"]
-    }
-    centre = {str(o["label"]): o.get("plane_centroid") for o in d["objects"]}
-    by_centroid = {
-        key: centroid_primary(centre[key[0]], centre[key[1]])
-        for key in relations
-        if centre.get(key[0]) is not None and centre.get(key[1]) is not None
-    }
-    return PredictedScene(name, objects, relations, seconds, centroid_relations=by_centroid)
 
 
 # --------------------------------------------------------------------------------------------
@@ -245,6 +127,17 @@ class SceneScore:
         Why the scene failed outright.
     labels, missing : tuple of str
         The true objects' labels, and those that were not described.
+    false_known : int
+        Described objects with a known label placed where no instance of that label is
+        (farther than :data:`MATCH_GATE_M` from every one; a distractor named as a learnt
+        object counts here).
+    surrounded_apart : int
+        Described pairs said "surrounded" whose true footprints do not overlap.
+    detail : tuple of (label, distance, found, error)
+        Per true (learnt) object: its label, metres from the camera, whether it was found and
+        its centroid error (NaN when missed), for the tables by distance and by object.
+    pitch_deg : float
+        The rig's pitch (0 = level).
     """
 
     name: str
@@ -268,6 +161,11 @@ class SceneScore:
     centroid_clear_correct: int = 0
     centroid_ambiguous_correct: int = 0
     by_tag: Mapping[str, list[int]] = field(default_factory=dict)
+
+    false_known: int = 0
+    surrounded_apart: int = 0
+    detail: tuple[tuple[str, float, bool, float], ...] = ()
+    pitch_deg: float = 0.0
 
 
 def _centroid_scores(
@@ -306,30 +204,26 @@ def score_scene(pred: PredictedScene, truth: SceneTruth) -> SceneScore:
     -------
     SceneScore
     """
-    labels = [o.label for o in truth.objects]
-    found = [o for o in truth.objects if o.label in pred.objects]
-    errors = tuple(
-        float(math.dist(pred.objects[o.label], o.centroid)) for o in found
-    )  # metres, 3-D
-    pairs = [(a, b) for a in labels for b in labels if a != b]
-    described = [p for p in pairs if p in pred.relations]
-    clear = [0, 0]
-    ambiguous = [0, 0]
-    for rel in truth.relations:
-        key = (rel.argument, rel.referent)
-        if key not in pred.relations:
-            continue
-        tally = ambiguous if rel.ambiguous else clear
-        tally[1] += 1
-        tally[0] += int(pred.relations[key] == rel.primary)
-    usable = pred.error is None and len(found) == len(labels) and len(described) == len(pairs)
+    known = [o for o in truth.objects if not o.distractor]
+    names = [o.key for o in known]
+    matched = match_objects(pred, truth)  # predicted name -> true name
+    to_pred = {t: p for p, t in matched.items()}
+    detail = object_detail(pred, known, to_pred)
+    errors = tuple(e for _lab, _d, ok, e in detail if ok)  # metres, 3-D
+    said = translate_relations(pred, matched)
+    pairs = [(a, b) for a in names for b in names if a != b]
+    described = [p for p in pairs if p in said]
+    clear, ambiguous, apart = tally_relations(said, truth.relations)
+    found = len(errors)
+    usable = pred.error is None and found == len(names) and len(described) == len(pairs)
+    false_known = [n for n in unmatched(pred, matched) if is_known(pred.label_of(n))]
     cen_clear, cen_ambiguous, by_tag = _centroid_scores(pred, truth)
     return SceneScore(
         name=truth.name,
         usable=usable,
-        n_objects=len(labels),
-        n_found=len(found),
-        n_extra=len(set(pred.objects) - set(labels)),
+        n_objects=len(names),
+        n_found=found,
+        n_extra=len(pred.objects) - len(matched),
         pairs_total=len(pairs),
         pairs_described=len(described),
         clear_correct=clear[0],
@@ -339,8 +233,12 @@ def score_scene(pred: PredictedScene, truth: SceneTruth) -> SceneScore:
         centroid_errors=errors,
         seconds=float(pred.seconds),
         error=pred.error,
-        labels=tuple(labels),
-        missing=tuple(lab for lab in labels if lab not in pred.objects),
+        labels=tuple(o.label for o in known),
+        missing=tuple(o.key for o in known if o.key not in to_pred),
+        false_known=len(false_known),
+        surrounded_apart=apart,
+        detail=detail,
+        pitch_deg=truth.pitch_deg,
         centroid_clear_correct=cen_clear,
         centroid_ambiguous_correct=cen_ambiguous,
         by_tag=by_tag,
@@ -387,6 +285,16 @@ class EvaluationResult:
     @property
     def objects_extra(self) -> int:
         return sum(s.n_extra for s in self.scenes)
+
+    @property
+    def false_known(self) -> int:
+        """Known objects reported where no instance of them is."""
+        return sum(s.false_known for s in self.scenes)
+
+    @property
+    def surrounded_apart(self) -> int:
+        """ "Surrounded" said of pairs whose footprints are apart."""
+        return sum(s.surrounded_apart for s in self.scenes)
 
     @property
     def pairs_described(self) -> int:
@@ -462,6 +370,10 @@ class EvaluationResult:
                         "centroid_errors": tuple(s["centroid_errors"]),
                         "labels": tuple(s.get("labels", ())),
                         "missing": tuple(s.get("missing", ())),
+                        "detail": tuple(
+                            (str(a), float(b), bool(c), float("nan") if e is None else float(e))
+                            for a, b, c, e in s.get("detail", ())
+                        ),
                     }
                 )
                 for s in data["per_scene"]
@@ -499,6 +411,8 @@ class EvaluationResult:
             "objects_found": self.objects_found,
             "objects_total": self.objects_total,
             "objects_extra": self.objects_extra,
+            "false_known": self.false_known,
+            "surrounded_apart": self.surrounded_apart,
             "pairs_described": self.pairs_described,
             "pairs_total": self.pairs_total,
             "primary_correct": cc,
@@ -522,9 +436,14 @@ class EvaluationResult:
                     "centroid_errors": list(s.centroid_errors),
                     "labels": list(s.labels),
                     "missing": list(s.missing),
+                    "detail": [
+                        [a, b, c, None if math.isnan(e) else round(e, 6)] for a, b, c, e in s.detail
+                    ],
                 }
                 for s in self.scenes
             ],
+            "by_band": breakdown(self.scenes, "band"),
+            "by_label": breakdown(self.scenes, "label"),
             **dict(self.extra),
         }
 
@@ -560,6 +479,7 @@ def format_table(result: EvaluationResult) -> str:
     uc, ut = result.usable_clear
     cent = "–" if ce["median"] is None else f"{100 * ce['median']:.1f} / {100 * ce['mean']:.1f} cm"
     secs = "–" if sp["median"] is None else f"{sp['median']:.2f} / {sp['mean']:.2f} s"
+    p90 = "–" if ce["p90"] is None else f"{100 * ce['p90']:.1f} cm"
     rows = [
         ("scenes usable (every object a hull, every pair a sentence)",
          _frac(result.n_usable, result.n_scenes), _frac(PAPER["usable"], PAPER["scenes"])),
@@ -572,6 +492,10 @@ def format_table(result: EvaluationResult) -> str:
         ("primary direction right, clear pairs of usable scenes", _frac(uc, ut), "–"),
         ("primary direction right, ambiguous pairs", _frac(ac, at), "–"),
         ("centroid error, median / mean", cent, "–"),
+        ("centroid error, 90th percentile", p90, "–"),
+        ("known objects reported where they are not", str(result.false_known), "–"),
+        ("\"surrounded\" between objects whose footprints are apart",
+         str(result.surrounded_apart), "–"),
         ("time per scene, median / mean", secs, "–"),
         ("scenes that failed outright", str(result.n_failed), "–"),
         ("centroid-vector rule instead: clear pairs",
@@ -596,14 +520,12 @@ def format_table(result: EvaluationResult) -> str:
                     f"| {tag} | {t['pairs']} | {_frac(t['forces'], t['pairs'])} | "
                     f"{_frac(t['centroid'], t['pairs'])} |"
                 )
-    found: dict[str, list[int]] = {}
-    for s in result.scenes:
-        for lab in s.labels:
-            found.setdefault(lab, [0, 0])[1] += 1
-            found[lab][0] += lab not in s.missing
+    found = found_by_label(result.scenes)
     if found:
         by_label = ", ".join(f"{lab} {f}/{n}" for lab, (f, n) in sorted(found.items()))
         lines += ["", f"Objects found by label: {by_label}."]
+    if any(s.detail for s in result.scenes):
+        lines += ["", *breakdown_table(result.scenes)]
     failed = [s for s in result.scenes if s.error]
     if failed:
         lines += ["", "Failed scenes:"]

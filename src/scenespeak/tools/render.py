@@ -112,13 +112,12 @@ class MeshSpec:
 
 
 def texture_image(name: str) -> NDArray[np.uint8]:
-    """RGB uint8 photograph ``name`` shipped with scikit-image (``skimage.data.<name>()``)."""
-    from skimage import data
+    """RGB uint8 photograph ``name``: a scikit-image sample (``skimage.data.<name>()``) or a
+    prefixed name (``opencv-doc:FILE``, ``mpl:FILE``, ``solid:R,G,B``; see
+    :func:`scenespeak.tools.scene_configs.texture_image`)."""
+    from scenespeak.tools.scene_configs import texture_image as find
 
-    img = np.asarray(getattr(data, name)())
-    if img.ndim == 2:
-        img = np.repeat(img[:, :, None], 3, axis=2)
-    return np.ascontiguousarray(img[:, :, :3]).astype(np.uint8)
+    return find(name)
 
 
 def _write_obj(
@@ -246,7 +245,7 @@ def render_with_depth(
                 else:
                     write_box_obj(obj, *m.size)
                 if m.texture not in textures:
-                    png = tmpdir / f"tex_{m.texture}.png"
+                    png = tmpdir / f"tex_{len(textures)}.png"
                     cv2.imwrite(str(png), texture_image(m.texture)[:, :, ::-1])
                     textures[m.texture] = p.loadTexture(str(png), physicsClientId=cid)
                 vis = p.createVisualShape(p.GEOM_MESH, fileName=str(obj), physicsClientId=cid)

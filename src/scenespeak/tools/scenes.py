@@ -39,6 +39,14 @@ from scenespeak.tools.render import (
     render,
     render_with_depth,
 )
+from scenespeak.tools.scene_configs import (
+    GeneratorConfig,
+    as_objects,
+    config_catalogue,
+    config_choice,
+    config_yaws,
+    instance_names,
+)
 
 __all__ = [
     "CATALOGUE",
@@ -82,6 +90,8 @@ class CatalogueObject:
     shape: str
     size: tuple[float, float, float]
     texture: str
+    #: Never learnt: appears in scenes of the ``tuning``/``validation`` configurations only.
+    distractor: bool = False
 
 
 #: The fixed catalogue: sizes of real household objects.
@@ -290,7 +300,7 @@ def sample_layout(
     seed: int | Sequence[int],
     rig: Rig,
     *,
-    catalogue: Sequence[CatalogueObject] = CATALOGUE,
+    catalogue: Sequence[CatalogueObject] | GeneratorConfig = CATALOGUE,
     n_objects: int | None = None,
     stacked: bool = False,
     distance_range: tuple[float, float] = (0.5, 2.0),
@@ -302,17 +312,26 @@ def sample_layout(
     Objects stand on the floor (one may stand on another when ``stacked``), their centroids
     ``distance_range`` metres from the left camera, footprints at least 3 cm apart, wholly
     inside both images, and each at least ``min_visible`` unoccluded (estimated from the
-    silhouettes in depth order).
+    silhouettes in depth order). ``catalogue`` may be a ``GeneratorConfig`` (its own mix).
     """
     rng = np.random.default_rng(seed)
+    config = catalogue if isinstance(catalogue, GeneratorConfig) else None
+    if config is not None:
+        catalogue = config_catalogue(config)
+        min_visible = config.min_visible
+        lo, hi = config.n_objects
+        n_objects = int(rng.integers(lo, hi + 1))
     n = int(n_objects) if n_objects is not None else int(rng.integers(3, 6))
-    if not 1 <= n <= len(catalogue):
+    if config is None and not 1 <= n <= len(catalogue):
         raise InputError("n_objects", f"must be between 1 and {len(catalogue)}, got {n}")
     left, right = rig.camera("left"), rig.camera("right")
     w, h = rig.image_size
     half = np.tan(np.radians(rig.hfov_deg) / 2)
     for _ in range(50):
-        chosen = [catalogue[i] for i in rng.choice(len(catalogue), n, replace=False)]
+        if config is not None:
+            chosen = config_choice(rng, config, catalogue, n)
+        else:
+            chosen = [catalogue[i] for i in rng.choice(len(catalogue), n, replace=False)]
         placed: list[Placement] = []
         top: CatalogueObject | None = None
         if stacked and n >= 2:
@@ -477,6 +496,7 @@ def _truth_dict(placed: Sequence[Placement], rig: Rig, seg: NDArray[np.int32]) -
     s = SUPERSAMPLE
     objects: list[dict[str, Any]] = []
     sil = [_silhouette(left, p) for p in placed]
+    names = instance_names([p.obj.label for p in placed])
     for k, pl in enumerate(placed):
         c = left.to_camera(pl.centroid_world()[None])[0]
         fp = left.to_camera(np.c_[pl.footprint_world(), np.full(len(pl.footprint_world()), 0)])
@@ -486,6 +506,8 @@ def _truth_dict(placed: Sequence[Placement], rig: Rig, seg: NDArray[np.int32]) -
         objects.append(
             {
                 "label": pl.obj.label,
+                "name": names[k],
+                "distractor": pl.obj.distractor,
                 "index": k + 1,
                 "shape": pl.obj.shape,
                 "size": list(pl.obj.size),
@@ -499,8 +521,8 @@ def _truth_dict(placed: Sequence[Placement], rig: Rig, seg: NDArray[np.int32]) -
             }
         )
     relations = []
-    for i, a in enumerate(placed):
-        for j, b in enumerate(placed):
+    for i in range(len(placed)):
+        for j in range(len(placed)):
             if i == j:
                 continue
             fa = np.array(objects[i]["footprint"])
@@ -521,8 +543,8 @@ def _truth_dict(placed: Sequence[Placement], rig: Rig, seg: NDArray[np.int32]) -
                 reasons.append("hidden")
             relations.append(
                 {
-                    "argument": a.obj.label,
-                    "referent": b.obj.label,
+                    "argument": names[i],
+                    "referent": names[j],
                     "primary": primary,
                     "ambiguous": bool(reasons),
                     "angle_deg": round(angle, 3),
@@ -577,6 +599,7 @@ def generate_scene(
     catalogue: Sequence[CatalogueObject] = CATALOGUE,
     layout: Sequence[Placement] | None = None,
     depth_noise: bool = False,
+    config: GeneratorConfig | None = None,
 ) -> Path:
     """Render one scene into ``scene_dir`` (left/right images, calib, truth, labels).
 
@@ -596,13 +619,22 @@ def generate_scene(
         ``scene_dir``.
     """
     scene_dir = Path(scene_dir)
+    if config is not None and pitched and config.pitch_range[0] != config.pitch_range[1]:
+        seq = [seed] if isinstance(seed, int) else list(seed)  # the pitch: seed + [1]
+        pitch_deg = float(np.random.default_rng([*seq, 1]).uniform(*config.pitch_range))
     rig = make_rig(
         pitched, image_size=image_size, hfov_deg=hfov_deg, baseline=baseline, pitch_deg=pitch_deg
     )
     placed = (
         tuple(layout)
         if layout is not None
-        else sample_layout(seed, rig, catalogue=catalogue, n_objects=n_objects, stacked=stacked)
+        else sample_layout(
+            seed,
+            rig,
+            catalogue=config if config is not None else catalogue,
+            n_objects=n_objects,
+            stacked=stacked,
+        )
     )
     (img_l, seg_l, z_l), (img_r, _, _) = render_with_depth(
         [p.mesh() for p in placed], [rig.camera("left"), rig.camera("right")], SUPERSAMPLE
@@ -715,9 +747,10 @@ def render_training_views(
     hfov_deg: float = 60.0,
     yaws: Sequence[float] | None = None,
     distance: float = 0.5,
+    masks: bool = True,
 ) -> list[Path]:
     """Render ``obj`` alone from a few viewpoints about ``distance`` metres away, writing
-    ``view_XX.png`` and ``view_XX_mask.png``.
+    ``view_XX.png`` and (with ``masks``) ``view_XX_mask.png``.
 
     ``yaws`` defaults to :func:`view_yaws` (front, ±30° and back for boxes and cards; every
     45° for cylinders)."""
@@ -735,7 +768,8 @@ def render_training_views(
         ((img, seg),) = render([pl.mesh()], [cam], SUPERSAMPLE)
         mask = downsample_labels(seg, SUPERSAMPLE, 1) * 255
         _write_rgb(out / f"view_{k:02d}.png", img)
-        cv2.imwrite(str(out / f"view_{k:02d}_mask.png"), mask)
+        if masks:
+            cv2.imwrite(str(out / f"view_{k:02d}_mask.png"), mask)
         written.append(out / f"view_{k:02d}.png")
     return written
 
@@ -779,6 +813,7 @@ def generate_dataset(
     overwrite: bool = False,
     progress: Callable[[int, int], Any] | None = None,
     depth_noise: bool = False,
+    config: str = "default",
 ) -> Path:
     """Generate a dataset of ``n_scenes`` rendered stereo scenes with ground truth.
 
@@ -801,6 +836,8 @@ def generate_dataset(
         Called after each object's views and each scene.
     depth_noise : bool
         Also write each scene's ``depth_noisy.png`` (see :func:`generate_scene`).
+    config : str
+        ``"default"``, ``"tuning"`` or ``"validation"`` (``scene_configs.CONFIGS``; docs/scenes.md).
 
     Raises
     ------
@@ -808,7 +845,17 @@ def generate_dataset(
         If ``out_dir`` is a file, or a non-empty folder that is not a scenespeak dataset, or a
         dataset made with other settings (without ``overwrite``).
     """
+    from scenespeak.tools.scene_configs import CONFIGS
+
     out = Path(out_dir)
+    if config not in CONFIGS:
+        raise InputError(
+            "config", f"unknown configuration {config!r} (one of {', '.join(CONFIGS)})"
+        )
+    cfg = CONFIGS[config]
+    catalogue = CATALOGUE if config == "default" else tuple(as_objects(cfg.catalogue))
+    if config != "default" and pitched is False:
+        pitched = cfg.pitched
     if n_scenes < 0:
         raise InputError("n_scenes", f"must be >= 0, got {n_scenes}")
     if pitched not in (True, False, "mixed"):
@@ -824,13 +871,15 @@ def generate_dataset(
     }
     if depth_noise:  # only when set, so that datasets made before the option still match
         settings["depth_noise"] = True
+    if config != "default":
+        settings["config"] = config
     names = [f"scene_{i:03d}" for i in range(n_scenes)]
     meta = {
         "format": FORMAT,
         "seed": int(seed),
         "objects": [
             {"label": o.label, "shape": o.shape, "size": list(o.size), "texture": o.texture}
-            for o in CATALOGUE
+            for o in catalogue
         ],
         "scenes": names,
         "generator": settings,
@@ -859,14 +908,23 @@ def generate_dataset(
     for p in out.glob(".scene_*-*"):
         if p.is_dir():
             shutil.rmtree(p, ignore_errors=True)
+    if config != "default":
+        meta["distractors"] = [
+            {"label": o.label, "shape": o.shape, "size": list(o.size), "texture": o.texture}
+            for o in as_objects(cfg.distractors, True)
+        ]
     _dump(out / "dataset.json", meta)
-    total = (len(CATALOGUE) if views else 0) + n_scenes
+    total = (len(catalogue) if views else 0) + n_scenes
     done = 0
     if views:
-        for obj in CATALOGUE:
+        for obj in catalogue:
             d = out / "objects" / obj.label
-            if not (d / f"view_{len(view_yaws(obj)) - 1:02d}_mask.png").exists():
-                render_training_views(obj, d, image_size=image_size, hfov_deg=hfov_deg)
+            yaws = config_yaws(obj, cfg)
+            last = f"view_{len(yaws) - 1:02d}" + ("_mask.png" if cfg.masks else ".png")
+            if not (d / last).exists():
+                render_training_views(
+                    obj, d, image_size=image_size, hfov_deg=hfov_deg, yaws=yaws, masks=cfg.masks
+                )
             done += 1
             if progress is not None:
                 progress(done, total)
@@ -882,6 +940,7 @@ def generate_dataset(
                 baseline=baseline,
                 stacked=stacked,
                 depth_noise=depth_noise,
+                config=None if config == "default" else cfg,
             )
         done += 1
         if progress is not None:

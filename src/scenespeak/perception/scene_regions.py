@@ -1,0 +1,520 @@
+"""Stage: named segments → objects (geometry first, appearance names).
+
+:mod:`scenespeak.perception.regions` finds what stands on the support; this stage gives each
+recognised detection its segment (the one holding most of its inlier keypoints), keeps only the
+pixels whose depth agrees with the object's own keypoints (an occluder never lends its depth),
+removes outliers with a radius scaled to the object, and turns the segments no detection
+claims into unknown objects. A detection whose keypoints fall in no segment keeps its carried
+outline (minus the support and the far background), and with no dense points at all its
+keypoints.
+
+>>> RegionStageOptions().depth_margin
+0.1
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+import cv2
+import numpy as np
+from numpy.typing import NDArray
+
+from scenespeak.perception.objects import SceneObject, Skipped, make_object
+from scenespeak.perception.regions import (
+    RegionOptions,
+    Segments,
+    clean_disparity,
+    components,
+    name_segments,
+    point_map,
+    segment,
+    support_plane,
+)
+
+__all__ = [
+    "RegionStageOptions",
+    "SceneGeometry",
+    "SceneInputs",
+    "detection_confidence",
+    "objects_from_regions",
+    "vote_segments",
+]
+
+
+@dataclass(frozen=True)
+class RegionStageOptions:
+    """Knobs of :func:`objects_from_regions`.
+
+    Attributes
+    ----------
+    regions : RegionOptions
+        The geometric segmentation.
+    outline_grow : float
+        The carried outline is grown by this share of its size before it is intersected with
+        the segment (a homography fits a cylinder's label only roughly).
+    depth_margin : float
+        Points are kept within ``depth_margin`` (metres) plus the object's own depth spread of
+        the median depth of its keypoints.
+    min_region_pixels : int
+        A named segment smaller than this is not trusted (the carried outline is used).
+    max_points : int
+        Dense points per object (an even, seeded sample).
+    min_points : int
+        Fewer dense points than this: the keypoints are used.
+    unknown : bool
+        Unclaimed segments become unknown objects.
+    unknown_min_pixels, unknown_min_keypoints : int
+        Least size of such a segment, and least SIFT keypoints in it (the dense map streaks
+        over a plain floor; a real object shows some texture).
+    unknown_max_extent, unknown_max_distance : float
+        Larger or farther segments are background, not objects (metres).
+    min_votes, min_votes_instance, vote_share, vote_lead : int, int, float, float
+        Naming an unclaimed segment by keypoint votes (:func:`vote_segments`): ``min_votes``
+        for an object not verified anywhere in the scene, ``min_votes_instance`` for another
+        instance of one that was (on the tuning set 3-6 chance votes for one object landed on
+        a plain distractor and on the sky, so an unverified object needs many).
+    """
+
+    regions: RegionOptions = field(default_factory=RegionOptions)
+    outline_grow: float = 0.15
+    depth_margin: float = 0.1
+    min_region_pixels: int = 30
+    max_points: int = 300
+    min_points: int = 30
+    unknown: bool = True
+    unknown_min_pixels: int = 400
+    unknown_min_keypoints: int = 4
+    unknown_max_extent: float = 0.6
+    unknown_max_distance: float = 2.5
+    min_votes: int = 8
+    min_votes_instance: int = 4
+    vote_share: float = 0.6
+    vote_lead: float = 2.0
+
+
+@dataclass(frozen=True, eq=False)
+class SceneGeometry:
+    """The scene's support plane, its segments and the dense point map (input left pixels)."""
+
+    normal: NDArray[np.float64]
+    level: float
+    segments: Segments
+    points: NDArray[np.float32]  # (h, w, 3), NaN where no depth
+
+
+def detection_confidence(inliers: int, distinct: int | None = None) -> float:
+    """A confidence in [0, 1] from a detection's verified inliers: ``1 − exp(−n / 6)`` over the
+    inliers at distinct positions (4 → 0.49, 8 → 0.74, 20 → 0.96).
+
+    >>> round(detection_confidence(8), 2)
+    0.74
+    """
+    n = inliers if distinct is None else distinct
+    return float(1.0 - math.exp(-max(n, 0) / 6.0))
+
+
+def scene_geometry(
+    dense: Any,
+    up: NDArray[np.float64],
+    shape: tuple[int, int],
+    options: RegionOptions,
+    stride: int = 2,
+) -> SceneGeometry:
+    """Clean the dense map, lift it to 3-D, find the support plane and segment.
+
+    The segmentation runs on every ``stride``-th pixel in both directions (a quarter of the
+    work at 2) and is read back at full resolution by nearest neighbour: an object 2 m away
+    is still 20 pixels wide, 10 on that grid.
+    """
+    from scenespeak.perception import stereo
+
+    h, w = shape
+    st = max(int(stride), 1)
+    d = clean_disparity(dense.disparity, dense.min_disparity, dense.num_disparities)
+    clean = dataclasses.replace(dense, disparity=d)
+    grid = np.zeros(shape, bool)
+    grid[::st, ::st] = True
+    xyz, xy = stereo.region_points(clean, grid, max_points=None)
+    small_shape = ((h + st - 1) // st, (w + st - 1) // st)
+    pm_small = point_map(xyz, xy / st, small_shape)
+    n, level = support_plane(xyz[:: max(len(xyz) // 20000, 1)], up, options)
+    with np.errstate(invalid="ignore"):
+        heights = pm_small @ n.astype(np.float32)
+    small_opts = dataclasses.replace(
+        options,
+        min_pixels=max(options.min_pixels // (st * st), 1),
+        opening=max(options.opening // st, 1) | 1,
+    )
+    seg = segment(pm_small[..., 2], heights, level, small_opts)
+    labels = np.repeat(np.repeat(seg.labels, st, axis=0), st, axis=1)[:h, :w]
+    pm = np.repeat(np.repeat(pm_small, st, axis=0), st, axis=1)[:h, :w]
+    full = Segments(np.ascontiguousarray(labels), seg.sizes * st * st, seg.level)
+    return SceneGeometry(n, level, full, np.ascontiguousarray(pm))
+
+
+def _outline_mask(outline: NDArray[np.float64], shape: tuple[int, int], grow: float) -> Any:
+    mask = np.zeros(shape, dtype=np.uint8)
+    pts = np.asarray(outline, dtype=np.float64)
+    if len(pts) < 3:
+        return mask.astype(bool)
+    cv2.fillPoly(mask, [np.round(pts * 16).astype(np.int32).reshape(-1, 1, 2)], 1, cv2.LINE_8, 4)
+    if grow > 0:
+        x0, y0 = pts.min(axis=0)
+        x1, y1 = pts.max(axis=0)
+        r = round(grow * max(x1 - x0, y1 - y0, 1.0))
+        if r > 0:
+            disc = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * r + 1, 2 * r + 1))
+            mask = np.asarray(cv2.dilate(mask, disc), np.uint8)
+    return mask.astype(bool)
+
+
+def _agreeing(
+    pts: NDArray[np.float64], kp: NDArray[np.float64], margin: float
+) -> NDArray[np.float64]:
+    """Points whose depth agrees with the object's own keypoints (median ± spread + margin)."""
+    if len(kp) < 2 or not len(pts):
+        return pts
+    z = kp[:, 2]
+    med = float(np.median(z))
+    spread = float(np.percentile(np.abs(z - med), 90))
+    keep = np.abs(pts[:, 2] - med) <= spread + margin
+    return pts[keep]
+
+
+def _sample(pts: NDArray[np.float64], n: int, seed: int = 0) -> NDArray[np.float64]:
+    if len(pts) <= n:
+        return pts
+    rng = np.random.default_rng(seed)
+    return pts[np.sort(rng.choice(len(pts), size=n, replace=False))]
+
+
+def _region_for(
+    k: int,
+    det_idx: int,
+    owners: dict[int, list[int]],
+    outlines: list[NDArray[np.bool_]],
+    geo: SceneGeometry,
+    opts: RegionStageOptions,
+) -> NDArray[np.bool_] | None:
+    """The pixels of detection ``det_idx``: its segment within its grown outline; a segment
+    several detections share is split by their outlines."""
+    if k < 0:
+        return None
+    seg = geo.segments.mask(k)
+    region = seg & outlines[det_idx]
+    for other in owners.get(k, []):
+        if other < det_idx:  # detections come best first: the better one keeps shared pixels
+            region &= ~outlines[other]
+    if int(region.sum()) < opts.min_region_pixels:
+        return None
+    return region
+
+
+@dataclass(frozen=True, eq=False)
+class SceneInputs:
+    """What :func:`objects_from_regions` reads from the earlier stages.
+
+    Attributes
+    ----------
+    shape : (h, w)
+        The left image's size.
+    dense : DenseDisparity or None
+        The stereo stage's dense map (None: keypoints only).
+    points : Points3D
+        The triangulated stereo keypoints.
+    labelling : Labelling
+        The database's detections, keypoint labels and ratio-test matches.
+    keypoints_xy : (N, 2)
+        Positions of the left image's keypoints (the labelling's query).
+    up : (3,)
+        World up in the left camera frame.
+    id_to_label : dict
+        Database object id -> label (for the keypoint votes of :func:`vote_segments`; empty:
+        no votes).
+    """
+
+    shape: tuple[int, int]
+    dense: Any
+    points: Any
+    labelling: Any
+    keypoints_xy: NDArray[np.float64]
+    up: NDArray[np.float64]
+    id_to_label: dict[int, str] = field(default_factory=dict)
+
+
+@dataclass
+class _Work:
+    """The state shared by the steps of :func:`objects_from_regions`."""
+
+    inp: SceneInputs
+    opts: RegionStageOptions
+    kw: dict[str, Any]
+    geo: SceneGeometry | None
+    outlines: list[NDArray[np.bool_]]
+    seg_of: list[int]
+    owners: dict[int, list[int]]
+    taken: list[NDArray[np.bool_]] = field(default_factory=list)
+
+
+def objects_from_regions(
+    inputs: SceneInputs,
+    options: RegionStageOptions | None = None,
+    object_options: dict[str, Any] | None = None,
+) -> tuple[list[SceneObject], list[Skipped], SceneGeometry | None]:
+    """Objects of a scene: named segments, segments named by votes, then unknown segments.
+
+    Parameters
+    ----------
+    inputs : SceneInputs
+    options : RegionStageOptions, optional
+    object_options : dict, optional
+        Passed to :func:`~scenespeak.perception.objects.make_object` (``outliers``, ``eps``,
+        ``min_points``; ``radius`` defaults to the object-scaled radius).
+
+    Returns
+    -------
+    objects, skipped, geometry
+    """
+    opts = options or RegionStageOptions()
+    inp = dataclasses.replace(inputs, up=np.asarray(inputs.up, dtype=np.float64))
+    dets = list(inp.labelling.detections)
+    geo = (
+        scene_geometry(inp.dense, inp.up, inp.shape, opts.regions)
+        if inp.dense is not None
+        else None
+    )
+    seg_of = (
+        name_segments(
+            geo.segments, [inp.keypoints_xy[np.asarray(d.inliers, np.intp)] for d in dets]
+        )
+        if geo is not None
+        else [-1] * len(dets)
+    )
+    owners: dict[int, list[int]] = {}
+    for i, k in enumerate(seg_of):
+        owners.setdefault(k, []).append(i)
+    work = _Work(
+        inp,
+        opts,
+        {"radius": None, **(object_options or {})},
+        geo,
+        [_outline_mask(d.outline_in_scene, inp.shape, opts.outline_grow) for d in dets],
+        seg_of,
+        owners,
+    )
+    objects: list[SceneObject] = []
+    skipped: list[Skipped] = []
+    for i, det in enumerate(dets):
+        got = _known_object(work, i, det)
+        (objects if isinstance(got, SceneObject) else skipped).append(got)  # type: ignore[arg-type]
+    if geo is None:
+        return objects, skipped, geo
+    residual = _residual(geo, work.taken, opts)
+    claimed = _voted_objects(work, residual, objects)
+    _name_instances(objects)
+    if opts.unknown:
+        objects += _unknown_segments(
+            geo, residual, inp.keypoints_xy, claimed, inp.up, opts, work.kw
+        )
+    return objects, skipped, geo
+
+
+def _known_object(work: _Work, i: int, det: Any) -> SceneObject | Skipped:
+    """One detection: its segment (or outline) points agreeing with its keypoints' depth."""
+    inp, opts, geo = work.inp, work.opts, work.geo
+    name = getattr(det, "name", "") or det.label
+    inl = np.asarray(det.inliers, np.intp)
+    own_kp = np.asarray(inp.points.xyz, dtype=np.float64)[
+        np.isin(np.asarray(inp.points.left_index, dtype=np.intp), inl)
+    ]
+    dense_pts = np.zeros((0, 3))
+    from_outline = False
+    if geo is not None:
+        region = _region_for(work.seg_of[i], i, work.owners, work.outlines, geo, opts)
+        if region is None:  # no segment: the outline, above the support
+            region = _outline_mask(det.outline_in_scene, inp.shape, 0.0) & (
+                geo.segments.labels >= 0
+            )
+            from_outline = True
+        work.taken.append(region | (work.outlines[i] & (geo.segments.labels >= 0)))
+        dense_pts = geo.points[region].astype(np.float64)
+        dense_pts = dense_pts[np.all(np.isfinite(dense_pts), axis=1)]
+        dense_pts = _sample(_agreeing(dense_pts, own_kp, opts.depth_margin), opts.max_points)
+    note = None
+    if len(dense_pts) >= opts.min_points:
+        result = make_object(det.label, dense_pts, inp.up, source="dense", **work.kw)
+    else:
+        note = f"dense stereo gave {len(dense_pts)} points in its region, keypoints used"
+        result = make_object(det.label, own_kp, inp.up, source="keypoints", **work.kw)
+        from_outline = False
+    if isinstance(result, Skipped):
+        reason = result.reason
+        if not len(own_kp):
+            reason = (
+                "recognised in the left image, but none of its keypoints was matched "
+                "in the right image"
+            )
+        return Skipped(name, f"{reason}; {note}" if note else reason)
+    notes = (*result.notes, note) if note else result.notes
+    if from_outline:
+        notes = (*notes, "no segment held its keypoints: points from its outline")
+    conf = detection_confidence(int(det.score))
+    return dataclasses.replace(result, name=name, confidence=conf, notes=tuple(notes))
+
+
+def _residual(
+    geo: SceneGeometry, taken: list[NDArray[np.bool_]], opts: RegionStageOptions
+) -> Segments:
+    """What the detections did not take — the rest of their segments and the other segments —
+    split again into components (two objects merged by the dense map come apart here), minus
+    the slivers along the taken regions' borders."""
+    rest = geo.segments.labels >= 0
+    grow = np.ones((9, 9), np.uint8)
+    for region in taken:
+        rest &= cv2.dilate(region.astype(np.uint8), grow) == 0
+    opened = cv2.morphologyEx(rest.astype(np.uint8), cv2.MORPH_OPEN, np.ones((5, 5), np.uint8))
+    return components(opened > 0, geo.level, opts.regions.min_pixels)
+
+
+def _voted_objects(work: _Work, residual: Segments, objects: list[SceneObject]) -> set[int]:
+    """Residual segments named by keypoint votes, appended to ``objects``; their indices."""
+    inp, opts, geo = work.inp, work.opts, work.geo
+    claimed: set[int] = set()
+    if geo is None or not inp.id_to_label:
+        return claimed
+    verified = frozenset(d.label for d in inp.labelling.detections)
+    voted = vote_segments(
+        residual, inp.keypoints_xy, inp.labelling.matched, inp.id_to_label, claimed, opts, verified
+    )
+    for k, label, n_votes in voted:
+        pts = geo.points[residual.mask(k)].astype(np.float64)
+        pts = _sample(pts[np.all(np.isfinite(pts), axis=1)], opts.max_points)
+        result = make_object(label, pts, inp.up, source="segment", **work.kw)
+        if isinstance(result, SceneObject) and not _near_same_label(result, objects):
+            claimed.add(k)
+            note = f"named by {n_votes} keypoint votes (no geometric check passed)"
+            objects.append(
+                dataclasses.replace(
+                    result,
+                    name=label,
+                    confidence=0.7 * detection_confidence(n_votes),
+                    notes=(*result.notes, note),
+                )
+            )
+    return claimed
+
+
+def _near_same_label(obj: SceneObject, objects: list[SceneObject], gap: float = 0.12) -> bool:
+    """Whether an object of the same label stands within ``gap`` metres (on the plane) of
+    ``obj``'s points: then ``obj`` is a piece of it, not a second instance."""
+    for o in objects:
+        if o.label != obj.label:
+            continue
+        d = np.linalg.norm(obj.plane_xy[:, None, :] - o.plane_xy[None, ::4, :], axis=2)
+        if float(d.min()) < gap:
+            return True
+    return False
+
+
+def _name_instances(objects: list[SceneObject]) -> None:
+    """Several objects of one label get distinct names: the label, "label 2", ..."""
+    seen: dict[str, int] = {}
+    for i, o in enumerate(objects):
+        seen[o.label] = seen.get(o.label, 0) + 1
+        if seen[o.label] > 1:
+            objects[i] = dataclasses.replace(o, name=f"{o.label} {seen[o.label]}")
+
+
+def vote_segments(
+    segments: Segments,
+    keypoints_xy: NDArray[np.float64],
+    matched: NDArray[np.integer],
+    id_to_label: dict[int, str],
+    claimed: set[int],
+    opts: RegionStageOptions,
+    verified: frozenset[str] = frozenset(),
+) -> list[tuple[int, str, int]]:
+    """Unclaimed segments named by the ratio-test votes of the keypoints inside them.
+
+    A segment is named after the object most of its keypoints matched (before any geometric
+    check) when that object has at least ``min_votes`` votes at distinct positions, at least
+    ``vote_share`` of the segment's matched keypoints, and at least ``vote_lead`` times the
+    runner-up's votes. Chance matches of a never-learnt object spread over many objects (at
+    most 2 votes for one object on the tuning set's distractors), a recognised-but-unverified
+    object concentrates them. Returns ``(segment, label, votes)``.
+    """
+    h, w = segments.labels.shape
+    xy = np.asarray(keypoints_xy, dtype=np.float64)
+    if not len(xy):
+        return []
+    c = np.clip(np.rint(xy[:, 0]).astype(np.intp), 0, w - 1)
+    r = np.clip(np.rint(xy[:, 1]).astype(np.intp), 0, h - 1)
+    seg_of_kp = segments.labels[r, c]
+    m = np.asarray(matched)
+    out: list[tuple[int, str, int]] = []
+    for k in range(len(segments.sizes)):
+        if k in claimed:
+            continue
+        sel = (seg_of_kp == k) & (m >= 0)
+        if not sel.any():
+            continue
+        ids = m[sel]
+        pos = np.round(xy[sel]).astype(np.int64)
+        distinct: dict[int, int] = {}
+        for oid in np.unique(ids):
+            distinct[int(oid)] = len({tuple(p) for p in pos[ids == oid]})
+        ranked = sorted(distinct.items(), key=lambda kv: -kv[1])
+        best, votes = ranked[0]
+        second = ranked[1][1] if len(ranked) > 1 else 0
+        if (
+            votes
+            >= (opts.min_votes_instance if id_to_label.get(best) in verified else opts.min_votes)
+            and votes >= opts.vote_share * sum(distinct.values())
+            and votes >= opts.vote_lead * second
+            and best in id_to_label
+        ):
+            out.append((k, id_to_label[best], votes))
+    return out
+
+
+def _unknown_segments(
+    geo: SceneGeometry,
+    segments: Segments,
+    keypoints_xy: NDArray[np.float64],
+    claimed: set[int],
+    up: NDArray[np.float64],
+    opts: RegionStageOptions,
+    kw: dict[str, Any],
+) -> list[SceneObject]:
+    """Segments no detection holds, as unknown objects (left to right)."""
+    out: list[tuple[float, SceneObject]] = []
+    h, w = segments.labels.shape
+    c = np.clip(np.rint(keypoints_xy[:, 0]).astype(np.intp), 0, w - 1)
+    r = np.clip(np.rint(keypoints_xy[:, 1]).astype(np.intp), 0, h - 1)
+    hit = segments.labels[r, c]
+    n_kp = np.bincount(hit[hit >= 0], minlength=len(segments.sizes))
+    for k, size in enumerate(segments.sizes.tolist()):
+        if k in claimed or size < opts.unknown_min_pixels or n_kp[k] < opts.unknown_min_keypoints:
+            continue
+        pts = geo.points[segments.mask(k)].astype(np.float64)
+        pts = pts[np.all(np.isfinite(pts), axis=1)]
+        if not len(pts):
+            continue
+        centre = np.median(pts, axis=0)
+        if float(np.linalg.norm(centre)) > opts.unknown_max_distance:
+            continue
+        ext = np.percentile(pts, 95, axis=0) - np.percentile(pts, 5, axis=0)
+        if float(np.max(ext)) > opts.unknown_max_extent:
+            continue
+        obj = make_object("unknown", _sample(pts, opts.max_points), up, source="segment", **kw)
+        if isinstance(obj, SceneObject):
+            out.append((float(obj.plane_centroid[0]), obj))
+    out.sort(key=lambda t: t[0])
+    return [
+        dataclasses.replace(o, label=f"unknown object {j}", name=f"unknown object {j}")
+        for j, (_x, o) in enumerate(out, 1)
+    ]

@@ -1,0 +1,108 @@
+"""Geometry first: the support plane, segments cut at depth jumps, naming by keypoint votes,
+and the object found in its own training photo without a mask."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from scenespeak.perception.objects import make_object, radius_inliers, scaled_radius
+from scenespeak.perception.regions import (
+    RegionOptions,
+    Segments,
+    clean_disparity,
+    name_segments,
+    segment,
+    support_plane,
+)
+from scenespeak.perception.scene_regions import RegionStageOptions, vote_segments
+from scenespeak.perception.segmentation import object_mask
+
+
+def _pitched_up(deg: float) -> np.ndarray:
+    a = np.radians(deg)
+    return np.array([0.0, -np.cos(a), -np.sin(a)])
+
+
+def test_support_plane_of_a_pitched_rig_is_found_under_boxes() -> None:
+    rng = np.random.default_rng(3)
+    up = _pitched_up(25.0)
+    # build points in a world frame (z up, floor at -0.45 below the camera) and rotate in
+    floor = np.c_[rng.uniform(-1, 1, 3000), rng.uniform(0.5, 2.5, 3000), np.full(3000, -0.45)]
+    box = np.c_[rng.uniform(0.0, 0.2, 1500), np.full(1500, 1.2), rng.uniform(-0.45, -0.2, 1500)]
+    noise = rng.uniform([-1, 0.5, -2.0], [1, 3, 1.0], (200, 3))  # stray dense-map points
+    world = np.r_[floor, box, noise]
+    a = np.radians(25.0)
+    # world -> camera: x right, y down, z forward (camera pitched down by a)
+    rot = np.array([[1, 0, 0], [0, -np.sin(a), -np.cos(a)], [0, np.cos(a), -np.sin(a)]])
+    cam = world @ rot.T
+    n, level = support_plane(cam, up)
+    assert np.degrees(np.arccos(np.clip(n @ up, -1, 1))) < 1.0
+    assert abs(level - (-0.45)) < 0.01
+
+
+def test_segments_split_at_depth_jumps_and_drop_the_floor() -> None:
+    h, w = 80, 120
+    z = np.full((h, w), 2.0)  # floor far behind (its height is the support's)
+    heights = np.zeros((h, w))
+    z[20:70, 10:50] = 1.0  # a box at 1 m
+    heights[20:70, 10:50] = np.linspace(0.4, 0.02, 50)[:, None]
+    z[30:70, 40:90] = 1.4  # a box at 1.4 m, partly hidden by the first (touching in the image)
+    z[20:70, 10:50] = 1.0
+    heights[30:70, 40:90] = np.linspace(0.3, 0.02, 40)[:, None]
+    heights[20:70, 10:50] = np.linspace(0.4, 0.02, 50)[:, None]
+    seg = segment(z, heights, 0.0, RegionOptions(min_pixels=30))
+    near, far = int(seg.labels[40, 20]), int(seg.labels[50, 70])
+    assert near >= 0 and far >= 0 and near != far  # the occluder does not merge with it
+    assert seg.labels[5, 5] == -1  # the floor is the support, not an object
+    # the occluded box keeps none of the occluder's pixels
+    assert not np.any(seg.labels[20:70, 10:40] == far)
+
+
+def test_search_range_ends_carry_no_depth() -> None:
+    d = np.array([[25.0, 30.0, 72.0]])
+    assert np.isnan(clean_disparity(d, 25, 48)).tolist() == [[True, False, True]]
+
+
+def test_keypoint_votes_name_a_segment_but_chance_matches_do_not() -> None:
+    lab = np.full((60, 60), -1, np.int32)
+    lab[5:25, 5:25] = 0
+    lab[30:55, 30:55] = 1
+    seg = Segments(lab, np.array([400, 625]), 0.0)
+    xy = np.array([[10, 10], [12, 14], [20, 8], [15, 20], [40, 40], [45, 35], [50, 50]], float)
+    # segment 0: 4 votes for object 7; segment 1: three different objects (a distractor)
+    matched = np.array([7, 7, 7, 7, 2, 3, 4])
+    names = {7: "mug", 2: "a", 3: "b", 4: "c"}
+    opts = RegionStageOptions()
+    # a second instance of a mug verified elsewhere in the scene: 4 votes are enough
+    assert vote_segments(seg, xy, matched, names, set(), opts, frozenset({"mug"})) == [
+        (0, "mug", 4)
+    ]
+    # a mug verified nowhere needs min_votes (8)
+    assert vote_segments(seg, xy, matched, names, set(), opts) == []
+    assert name_segments(seg, [xy[:4], xy[4:]]) == [0, 1]
+
+
+def test_scaled_radius_keeps_a_long_object_and_drops_a_stray_point() -> None:
+    keyboard = np.c_[np.linspace(0, 1.17, 300), np.zeros(300), np.full(300, 3.0)]
+    obj = make_object("piano", keyboard, radius=None, outliers="radius")
+    assert not isinstance(obj, str) and obj.n_points == 300  # the fixed 0.5 m cut it to 0.99 m
+    fixed = make_object("piano", keyboard, radius=0.5, outliers="radius")
+    assert fixed.n_points < 300  # type: ignore[union-attr]
+    can = np.r_[np.random.default_rng(0).normal(0, 0.01, (30, 2)), [[0.3, 0.0]]]
+    assert not radius_inliers(can, scaled_radius(can))[-1]
+
+
+def test_object_mask_on_a_plain_background() -> None:
+    rng = np.random.default_rng(4)
+    img = np.zeros((240, 320, 3), np.uint8)
+    img[:] = np.linspace(120, 170, 240)[:, None, None]  # a floor lit unevenly
+    img[:60] = 250  # a white wall above the horizon
+    img[80:200, 100:180] = rng.integers(0, 255, (120, 80, 3))
+    m = object_mask(img)
+    assert m is not None
+    truth = np.zeros(img.shape[:2], bool)
+    truth[80:200, 100:180] = True
+    iou = (m & truth).sum() / (m | truth).sum()
+    assert iou > 0.9
+    full = rng.integers(0, 255, (240, 320, 3)).astype(np.uint8)  # fills the frame
+    assert object_mask(full) is None
