@@ -524,8 +524,7 @@ def format_table(result: EvaluationResult) -> str:
     if found:
         by_label = ", ".join(f"{lab} {f}/{n}" for lab, (f, n) in sorted(found.items()))
         lines += ["", f"Objects found by label: {by_label}."]
-    if any(s.detail for s in result.scenes):
-        lines += ["", *breakdown_table(result.scenes)]
+    lines += breakdown_table(result.scenes)
     failed = [s for s in result.scenes if s.error]
     if failed:
         lines += ["", "Failed scenes:"]

@@ -68,8 +68,11 @@ def breakdown(scenes: Sequence[Any], by: str) -> dict[str, dict[str, Any]]:
 
 
 def breakdown_table(scenes: Sequence[Any]) -> list[str]:
-    """Markdown tables of objects found and centroid errors by distance, rig and object."""
-    lines: list[str] = []
+    """Markdown tables of objects found and centroid errors by distance, rig and object
+    (preceded by an empty line; none without per-object detail)."""
+    if not any(s.detail for s in scenes):
+        return []
+    lines: list[str] = [""]
     usable = {"level": [0, 0], "pitched": [0, 0]}
     for s in scenes:
         k = "pitched" if s.pitch_deg else "level"
