@@ -58,9 +58,8 @@ def points_cmd(
     )
     if swap:
         left, right = right, left
-    # colour, as describe reads them: one path (the dense check of the matches uses colour)
-    left_img = load_image(left, gray=False)
-    right_img = load_image(right, gray=False)
+    left_img = load_image(left)
+    right_img = load_image(right)
     with _status("matching the stereo pair", quiet):
         plausibility.check_pair_order(left_img, right_img, rig, names=(str(left), str(right)))
         points = _stereo_points(
