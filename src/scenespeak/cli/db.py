@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import sys
 from pathlib import Path
 from typing import Annotated
 
@@ -43,9 +44,10 @@ def db_add(
     masks = list(mask) if mask else None
     if masks is not None and len(masks) != len(images):
         raise InputError("--mask", f"{len(masks)} masks for {len(images)} images; give one each")
+    _ready_to_write(db, create=True)
     with (
         _status(f"learning {label!r} from {len(images)} image(s)", quiet),
-        ObjectDatabase.open(db, create=True) as database,
+        ObjectDatabase.open(db) as database,
     ):
         info = database.add_object(label, images, masks=masks, replace=replace)
     _echo(f"added {info.label!r}: {info.views} view(s), {info.descriptors} descriptors")
@@ -57,8 +59,11 @@ def db_list(
     as_json: Annotated[bool, typer.Option("--json", help="Print JSON.")] = False,
 ) -> None:
     """List the objects in the database."""
+    from scenespeak.perception import dbfiles
     from scenespeak.perception.recognition import ObjectDatabase
 
+    dbfiles.check_file(db)
+    dbfiles.validate(db)
     with ObjectDatabase.open(db, readonly=True) as database:
         rows = [
             {"label": o.label, "views": o.views, "descriptors": o.descriptors, "added": o.added}
@@ -85,16 +90,23 @@ def db_remove(
     db: DbOpt,
 ) -> None:
     """Remove objects from the database (all or none)."""
-    from scenespeak.perception.recognition import ObjectDatabase
+    from scenespeak.perception import dbfiles
 
-    with ObjectDatabase.open(db) as database:
-        remove_many = getattr(database, "remove_many", None)
-        if remove_many is not None:
-            remove_many(labels)
-        else:
-            missing = [lab for lab in labels if lab not in database]
-            if missing:
-                raise InputError(db, f"no object labelled {missing[0]!r}; nothing was removed")
-            for lab in dict.fromkeys(labels):
-                database.remove(lab)
-    _echo("removed " + ", ".join(repr(lab) for lab in dict.fromkeys(labels)))
+    _ready_to_write(db, create=False)
+    removed = dbfiles.remove_labels(db, list(labels), waiting=_say_waiting)
+    _echo("removed " + ", ".join(repr(lab) for lab in removed))
+
+
+def _say_waiting(message: str) -> None:
+    sys.stderr.write(f"scenespeak: {message}\n")
+    sys.stderr.flush()
+
+
+def _ready_to_write(db: Path, *, create: bool) -> None:
+    """The database file checked row by row (or created atomically), no other writer in it."""
+    from scenespeak.perception import dbfiles
+
+    if not dbfiles.check_file(db, must_exist=not create):
+        dbfiles.create_empty(db)
+    dbfiles.validate(db)
+    dbfiles.wait_for_writers(db, waiting=_say_waiting)

@@ -284,7 +284,7 @@ def _describe(left: Path, right: Path, rig: Any, db: Path, **options: Any) -> An
     """The pipeline on files, with the plausibility checks of ``docs/trust.md``."""
     import numpy as np
 
-    from scenespeak.perception import plausibility
+    from scenespeak.perception import dbfiles, plausibility
     from scenespeak.perception.features import load_image
     from scenespeak.perception.recognition import ObjectDatabase
     from scenespeak.pipeline import describe_scene
@@ -293,6 +293,8 @@ def _describe(left: Path, right: Path, rig: Any, db: Path, **options: Any) -> An
     right_img = load_image(right, gray=False)
     plausibility.check_pair_order(left_img, right_img, rig, names=(str(left), str(right)))
     sources = {"left": str(left), "right": str(right), "calib": rig.source, "db": str(db)}
+    dbfiles.check_file(db)
+    dbfiles.validate(db)
     with ObjectDatabase.open(db, readonly=True) as database:
         description = describe_scene(left_img, right_img, rig, database, sources=sources, **options)
     z = np.array([o["centroid"][2] for o in description.to_dict()["objects"] if o.get("centroid")])

@@ -38,6 +38,12 @@ def evaluate_cmd(
     """Describe every scene of a dataset and score it against the ground truth."""
     from scenespeak.tools.evaluation import evaluate, format_table
 
+    if db is not None:
+        from scenespeak.perception import dbfiles
+
+        dbfiles.check_file(db)
+        dbfiles.validate(db)
+
     progress = _progress(0, "evaluating", quiet)
     if progress is None:
         result = evaluate(dataset, db=db, workers=workers, progress=None, scheduler=scheduler)

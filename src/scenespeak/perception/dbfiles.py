@@ -203,3 +203,243 @@ def begin_write(conn: sqlite3.Connection, path: Path, waiting: Waiting | None = 
         if _locked(exc):
             raise locked_error(path) from None
         raise
+
+
+# --------------------------------------------------------------------------------------------
+# checks before the database is opened, and of every row
+
+
+def check_file(path: Path, *, must_exist: bool = True) -> bool:
+    """Refuse what is not a regular database file before SQLite touches it; True if it exists.
+
+    A FIFO would block, a device read forever, a folder or an over-long name give SQLite's
+    own confusing errors; a 0-byte file is not a database.
+    """
+    import stat
+
+    try:
+        st = os.stat(path)
+    except FileNotFoundError:
+        if must_exist:
+            raise DatabaseError(
+                path,
+                "no such file; create it with `scenespeak db add --db FILE --label NAME IMAGE`",
+            ) from None
+        return False
+    except OSError as exc:
+        from scenespeak.safeio import _os_problem
+
+        raise DatabaseError(path, _os_problem(exc)) from None
+    if stat.S_ISDIR(st.st_mode):
+        raise DatabaseError(path, "is a folder, not a scenespeak object database file")
+    if not stat.S_ISREG(st.st_mode):
+        raise DatabaseError(path, "is not a regular file (a FIFO or a device?): not a database")
+    if st.st_size == 0:
+        raise DatabaseError(
+            path,
+            "the file is empty (0 bytes), not a scenespeak object database (scenespeak "
+            "creates databases atomically, so no other scenespeak is creating it): delete it",
+        )
+    return True
+
+
+def _probe(path: Path) -> None:
+    """Read the schema once, telling a lock apart from a file that is not ours."""
+    conn = connect(path, readonly=True)
+    try:
+        conn.execute("SELECT COUNT(*) FROM sqlite_master").fetchone()
+    except sqlite3.OperationalError as exc:
+        if _locked(exc):
+            raise locked_error(path) from None
+        raise DatabaseError(path, f"is not a scenespeak object database ({exc})") from None
+    except sqlite3.DatabaseError as exc:
+        raise DatabaseError(path, f"is not a scenespeak object database ({exc})") from None
+    finally:
+        conn.close()
+
+
+_ROWS = """
+SELECT v.id, v.object_id, o.label, v.n, v.width, v.height, typeof(v.descriptors),
+       length(v.descriptors), typeof(v.keypoints), length(v.keypoints), typeof(v.outline),
+       length(v.outline)
+FROM views v LEFT JOIN objects o ON o.id = v.object_id ORDER BY v.id
+"""
+
+
+def validate(path: Path) -> None:
+    """Check every row of an (existing, ours) database before it is used.
+
+    Counts must be whole numbers within the limits, every BLOB must hold exactly what its row
+    says, labels must be printable, every object needs a view and every view an object.
+    Reads only lengths and small columns (no BLOB is loaded), so it is cheap.
+
+    Raises
+    ------
+    DatabaseError
+        ``database is damaged: <which row>: <what>`` — or "locked by another process".
+    """
+    from scenespeak.perception.database import ObjectDatabase
+
+    _probe(path)
+    ObjectDatabase.open(path, readonly=True).close()  # ours, this schema version
+    lim = _limits.current()
+    conn = connect(path, readonly=True)
+    try:
+        tables = {r[0] for r in conn.execute("SELECT name FROM sqlite_master WHERE type='table'")}
+        if not {"meta", "objects", "views"} <= tables:
+            return  # not ours, or another schema: ObjectDatabase.open says which
+        cols = {r[1] for r in conn.execute("PRAGMA table_info(views)")}
+        needed = {"n", "width", "height", "descriptors", "keypoints", "outline", "object_id"}
+        if not needed <= cols:
+            missing = ", ".join(sorted(needed - cols))
+            raise damaged(path, "table views", f"missing columns: {missing}")
+        meta = dict(conn.execute("SELECT key, value FROM meta").fetchall())
+        if "generation" in meta:
+            try:
+                int(str(meta["generation"]))
+            except ValueError:
+                raise damaged(
+                    path, "meta generation", f"{meta['generation']!r} is not a number"
+                ) from None
+        labels = conn.execute("SELECT id, label FROM objects").fetchall()
+        if len(labels) > lim.max_db_objects:
+            raise damaged(path, "table objects", f"{len(labels)} objects is over max_db_objects")
+        for oid, label in labels:
+            try:
+                printable_label(label, path, f"object {oid}")
+            except UnicodeDecodeError:
+                raise damaged(path, f"object {oid}", "the label is not UTF-8 text") from None
+        seen: set[int] = set()
+        for row in conn.execute(_ROWS):
+            _check_view(path, row, lim)
+            seen.add(int(row[1]))
+        lonely = [str(label) for oid, label in labels if oid not in seen]
+        if lonely:
+            raise damaged(path, f"object {clean_text(repr(lonely[0]))}", "has no training view")
+    except sqlite3.OperationalError as exc:
+        if _locked(exc):
+            raise locked_error(path) from None
+        raise damaged(path, "the file", str(exc)) from None
+    except (sqlite3.DatabaseError, UnicodeDecodeError) as exc:
+        raise damaged(path, "the file", str(exc)) from None
+    finally:
+        conn.close()
+
+
+def _check_view(path: Path, row: tuple[Any, ...], lim: _limits.Limits) -> None:
+    vid, oid, label, n, width, height, dt, dlen, kt, klen, ot, olen = row
+    where = f"view {vid} of {clean_text(repr(label))}" if label is not None else f"view {vid}"
+    if label is None:
+        raise damaged(path, where, f"belongs to object {oid}, which does not exist")
+    count = whole(n, path, f"{where}: n", limit=lim.max_db_descriptors)
+    whole(width, path, f"{where}: width", limit=lim.max_image_side, minimum=1)
+    whole(height, path, f"{where}: height", limit=lim.max_image_side, minimum=1)
+    for name, typ, length, per_row in (("descriptors", dt, dlen, 128), ("keypoints", kt, klen, 16)):
+        if typ != "blob":
+            raise damaged(path, f"{where}: {name}", f"expected binary data, got {typ}")
+        if length != count * per_row:
+            raise damaged(
+                path, f"{where}: {name}", f"{length} bytes, but n = {count} needs {count * per_row}"
+            )
+    if count == 0:
+        raise damaged(path, f"{where}: n", "a view without descriptors")
+    if ot != "blob" or olen % 8:
+        raise damaged(path, f"{where}: outline", f"{olen} bytes is not a list of (x, y) float32")
+    if olen // 8 > lim.max_db_outline:
+        raise damaged(path, f"{where}: outline", f"{olen // 8} vertices is over max_db_outline")
+    if olen // 8 < 3:
+        raise damaged(path, f"{where}: outline", f"{olen // 8} vertices; an outline needs 3")
+
+
+def remove_labels(path: Path, labels: list[str], waiting: Waiting | None = None) -> list[str]:
+    """Remove several objects in ONE transaction (all or none); return the labels removed.
+
+    Raises
+    ------
+    DatabaseError
+        A label that is not in the database (then nothing is removed), or a lock held longer
+        than ``db_wait_s``.
+    """
+    unique = list(dict.fromkeys(labels))
+    conn = connect(path, readonly=False)
+    try:
+        begin_write(conn, path, waiting)
+        try:
+            ids = []
+            for label in unique:
+                rows = conn.execute("SELECT id FROM objects WHERE label = ?", (label,)).fetchall()
+                if not rows:
+                    known = [
+                        str(r[0]) for r in conn.execute("SELECT label FROM objects ORDER BY label")
+                    ]
+                    shown = ", ".join(clean_text(k) for k in known[:10]) or "none"
+                    raise DatabaseError(
+                        path,
+                        f"has no object labelled {clean_text(repr(label))} (labels: {shown}); "
+                        "nothing was removed",
+                    )
+                ids.extend(int(r[0]) for r in rows)
+            for oid in ids:
+                conn.execute("DELETE FROM views WHERE object_id = ?", (oid,))
+                conn.execute("DELETE FROM objects WHERE id = ?", (oid,))
+            conn.execute(
+                "UPDATE meta SET value = CAST(CAST(value AS INTEGER) + 1 AS TEXT) "
+                "WHERE key = 'generation'"
+            )
+            conn.execute("COMMIT")
+        except BaseException:
+            conn.execute("ROLLBACK")
+            raise
+    except sqlite3.OperationalError as exc:
+        if _locked(exc):
+            raise locked_error(path) from None
+        raise DatabaseError(path, f"cannot write: {exc}") from None
+    finally:
+        conn.close()
+    return unique
+
+
+def wait_for_writers(path: Path, waiting: Waiting | None = None) -> None:
+    """Wait (saying so) until no other process holds a write lock; refuse after the limit."""
+    conn = connect(path, readonly=False)
+    try:
+        begin_write(conn, path, waiting)
+        conn.execute("ROLLBACK")
+    except sqlite3.OperationalError as exc:
+        if _locked(exc):
+            raise locked_error(path) from None
+        raise DatabaseError(path, f"cannot be opened for writing: {exc}") from None
+    finally:
+        conn.close()
+
+
+def create_empty(path: Path) -> bool:
+    """Create an empty scenespeak database at ``path`` atomically (False: it already exists).
+
+    The schema comes from :meth:`ObjectDatabase.create`, run on a temporary file.
+    """
+    from scenespeak.perception.database import ObjectDatabase
+
+    if not path.parent.is_dir():
+        raise DatabaseError(path, f"the folder {str(path.parent)!r} does not exist")
+    tmp = _tmp_name(path)
+    try:
+        ObjectDatabase.create(tmp).close()
+        fd = os.open(tmp, os.O_RDONLY)
+        try:
+            os.fsync(fd)
+        finally:
+            os.close(fd)
+        try:
+            os.link(tmp, path)
+            return True
+        except FileExistsError:
+            return False
+    except OSError as exc:
+        from scenespeak.safeio import _os_problem
+
+        raise DatabaseError(path, f"cannot create the database ({_os_problem(exc)})") from None
+    finally:
+        for suffix in ("", "-journal", "-wal", "-shm"):
+            with contextlib.suppress(OSError):
+                Path(str(tmp) + suffix).unlink()
