@@ -137,7 +137,11 @@ def load_scene_truth(scene_dir: str | PathLike[str]) -> SceneTruth:
     path = Path(scene_dir) / "truth.json"
     if not path.exists() and not path.is_symlink():
         raise InputError(path, "missing: every labelled scene needs a truth.json")
-    data = load_json(read_text(path, what="truth.json file"), path)
+    text = read_text(path, what="truth.json file")
+    try:
+        data = load_json(text, path)
+    except InputError as exc:
+        raise InputError(path, f"cannot be read as JSON ({exc.problem})") from None
     if not isinstance(data, Mapping) or not isinstance(data.get("objects"), list):
         raise InputError(path, 'expected {"objects": [...], "relations": [...]}')
     try:
