@@ -28,7 +28,7 @@ import test_real_calibration as t  # noqa: E402
 def main() -> None:
     real = Path(os.environ.get("SCENESPEAK_REAL_DATA", ROOT.parent / "shared" / "data" / "real"))
     print(f"load average: {os.getloadavg()}")
-    chess = t.chess.__wrapped__(real)  # type: ignore[attr-defined]
+    chess = t.calibrate_sets(real)
     tmp = Path(tempfile.mkdtemp(prefix="realcal-"))
     print("| set | pairs | stereo RMS (px) | form | median error | worst pair |")
     print("| --- | ---: | ---: | --- | ---: | ---: |")

@@ -71,6 +71,11 @@ def _pairs(root: Path, name: str) -> tuple[list[tuple[np.ndarray, np.ndarray]], 
 @pytest.fixture(scope="module")
 def chess(real_data: Path) -> dict[str, dict[str, Any]]:
     """Per set: the corner pairs, the image size and an OpenCV stereo calibration (metres)."""
+    return calibrate_sets(real_data)
+
+
+def calibrate_sets(real_data: Path) -> dict[str, dict[str, Any]]:
+    """The calibration of each set (also used by ``benchmarks/real_calibration.py``)."""
     out: dict[str, dict[str, Any]] = {}
     for name, (_, pattern, square, _) in SETS.items():
         pairs, size = _pairs(real_data, name)
