@@ -293,22 +293,7 @@ def validate(path: Path) -> None:
         if not needed <= cols:
             missing = ", ".join(sorted(needed - cols))
             raise damaged(path, "table views", f"missing columns: {missing}")
-        meta = dict(conn.execute("SELECT key, value FROM meta").fetchall())
-        if "generation" in meta:
-            try:
-                int(str(meta["generation"]))
-            except ValueError:
-                raise damaged(
-                    path, "meta generation", f"{meta['generation']!r} is not a number"
-                ) from None
-        labels = conn.execute("SELECT id, label FROM objects").fetchall()
-        if len(labels) > lim.max_db_objects:
-            raise damaged(path, "table objects", f"{len(labels)} objects is over max_db_objects")
-        for oid, label in labels:
-            try:
-                printable_label(label, path, f"object {oid}")
-            except UnicodeDecodeError:
-                raise damaged(path, f"object {oid}", "the label is not UTF-8 text") from None
+        labels = _check_objects(conn, path, lim)
         seen: set[int] = set()
         for row in conn.execute(_ROWS):
             _check_view(path, row, lim)
@@ -324,6 +309,29 @@ def validate(path: Path) -> None:
         raise damaged(path, "the file", str(exc)) from None
     finally:
         conn.close()
+
+
+def _check_objects(
+    conn: sqlite3.Connection, path: Path, lim: _limits.Limits
+) -> list[tuple[Any, Any]]:
+    """The meta generation and every object's label checked; the (id, label) rows."""
+    meta = dict(conn.execute("SELECT key, value FROM meta").fetchall())
+    if "generation" in meta:
+        try:
+            int(str(meta["generation"]))
+        except ValueError:
+            raise damaged(
+                path, "meta generation", f"{meta['generation']!r} is not a number"
+            ) from None
+    labels = conn.execute("SELECT id, label FROM objects").fetchall()
+    if len(labels) > lim.max_db_objects:
+        raise damaged(path, "table objects", f"{len(labels)} objects is over max_db_objects")
+    for oid, label in labels:
+        try:
+            printable_label(label, path, f"object {oid}")
+        except UnicodeDecodeError:
+            raise damaged(path, f"object {oid}", "the label is not UTF-8 text") from None
+    return labels
 
 
 def _check_view(path: Path, row: tuple[Any, ...], lim: _limits.Limits) -> None:
