@@ -373,7 +373,7 @@ def remove_labels(path: Path, labels: list[str], waiting: Waiting | None = None)
     try:
         begin_write(conn, path, waiting)
         try:
-            ids = []
+            ids: list[int] = []
             for label in unique:
                 rows = conn.execute("SELECT id FROM objects WHERE label = ?", (label,)).fetchall()
                 if not rows:

@@ -326,7 +326,7 @@ def config_yaws(obj: CatalogueObject, config: GeneratorConfig) -> tuple[float, .
         from scenespeak.tools.scenes import view_yaws
 
         return view_yaws(obj)
-    yaws = FIVE_CYLINDER_VIEW_YAWS if obj.shape == "cylinder" else FIVE_VIEW_YAWS
+    yaws: tuple[float, ...] = FIVE_CYLINDER_VIEW_YAWS if obj.shape == "cylinder" else FIVE_VIEW_YAWS
     if config.views != len(yaws):
         step = 360.0 / config.views
         yaws = tuple(float(k * step) for k in range(config.views))

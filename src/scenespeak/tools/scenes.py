@@ -22,7 +22,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from os import PathLike
 from pathlib import Path
-from typing import Any, Literal
+from typing import Any, Literal, cast
 
 import cv2
 import numpy as np
@@ -316,22 +316,26 @@ def sample_layout(
     """
     rng = np.random.default_rng(seed)
     config = catalogue if isinstance(catalogue, GeneratorConfig) else None
+    objects: Sequence[CatalogueObject] = (
+        config_catalogue(config)
+        if config is not None
+        else cast(Sequence[CatalogueObject], catalogue)
+    )
     if config is not None:
-        catalogue = config_catalogue(config)
         min_visible = config.min_visible
         lo, hi = config.n_objects
         n_objects = int(rng.integers(lo, hi + 1))
     n = int(n_objects) if n_objects is not None else int(rng.integers(3, 6))
-    if config is None and not 1 <= n <= len(catalogue):
-        raise InputError("n_objects", f"must be between 1 and {len(catalogue)}, got {n}")
+    if config is None and not 1 <= n <= len(objects):
+        raise InputError("n_objects", f"must be between 1 and {len(objects)}, got {n}")
     left, right = rig.camera("left"), rig.camera("right")
     w, h = rig.image_size
     half = np.tan(np.radians(rig.hfov_deg) / 2)
     for _ in range(50):
         if config is not None:
-            chosen = config_choice(rng, config, catalogue, n)
+            chosen = config_choice(rng, config, objects, n)
         else:
-            chosen = [catalogue[i] for i in rng.choice(len(catalogue), n, replace=False)]
+            chosen = [objects[i] for i in rng.choice(len(objects), n, replace=False)]
         placed: list[Placement] = []
         top: CatalogueObject | None = None
         if stacked and n >= 2:
@@ -860,7 +864,7 @@ def generate_dataset(
         raise InputError("n_scenes", f"must be >= 0, got {n_scenes}")
     if pitched not in (True, False, "mixed"):
         raise InputError("pitched", f"must be True, False or 'mixed', got {pitched!r}")
-    settings = {
+    settings: dict[str, Any] = {
         "n_scenes": int(n_scenes),
         "pitched": pitched,
         "image_size": [int(v) for v in image_size],
