@@ -226,7 +226,7 @@ def _fork(case: Case, out: int, err: int, memory: int) -> int:
     return pid
 
 
-def _exec(case: Case, root: Path, out: int, err: int, memory: int) -> int:
+def _exec(case: Case, root: Path, out: int, err: int, memory: int) -> subprocess.Popen[bytes]:
     def limit() -> None:  # pragma: no cover - runs in the child
         os.setsid()
         resource.setrlimit(resource.RLIMIT_AS, (memory, memory))
@@ -238,7 +238,10 @@ def _exec(case: Case, root: Path, out: int, err: int, memory: int) -> int:
         stdin=subprocess.DEVNULL,
         preexec_fn=limit,
     )
-    return proc.pid
+    # The caller keeps the Popen alive until it has reaped the child itself: a Popen that is
+    # garbage collected while its child runs is reaped by subprocess's own clean-up on the next
+    # Popen, and os.wait4 then fails with ECHILD.
+    return proc
 
 
 def run_one_exec(root: Path, case_id: str) -> None:
@@ -266,6 +269,7 @@ def run_cases(
     options = _known_options()
     pending = list(enumerate(cases))[::-1]
     running: dict[int, tuple[int, Case, float, int, int]] = {}
+    procs: dict[int, subprocess.Popen[bytes]] = {}  # exec mode: kept alive until reaped
     results: dict[int, Outcome] = {}
     tmp = Path(tempfile.mkdtemp(prefix="fuzz-io-"))
     while pending or running:
@@ -276,7 +280,9 @@ def run_cases(
             if mode == "fork":
                 pid = _fork(case, out, err, memory)
             else:
-                pid = _exec(case, root, out, err, memory)
+                proc = _exec(case, root, out, err, memory)
+                pid = proc.pid
+                procs[pid] = proc
             running[pid] = (k, case, time.monotonic(), out, err)
         time.sleep(0.005)
         for pid, (k, case, start, out, err) in list(running.items()):
@@ -291,6 +297,8 @@ def run_cases(
                 timed_out = True
             _kill_group(pid)
             del running[pid]
+            if pid in procs:  # reaped above, not by Popen: tell it so
+                procs.pop(pid).returncode = os.waitstatus_to_exitcode(status)
             outcome = _outcome(case, k, status, usage, elapsed, out, err, timed_out, options)
             results[k] = outcome
             if progress is not None:
