@@ -1,7 +1,7 @@
 """Degrees of truth of the four directions from one force histogram (private).
 
 Matsakis' effective-forces model (Matsakis, Keller, Wendling, Marjamaa, Sjahputera, IEEE SMC-B
-31(4), 2001), as written down in ``/work/shared/design/language.md``. For a histogram ``h`` of
+31(4), 2001), as written down in ``docs/language.md``. For a histogram ``h`` of
 ``N`` bins (``N`` divisible by 4, ``n = N / 4`` bins per right angle) and a direction ``alpha``
 (a bin index), with ``phi`` the signed bin offset from ``alpha``:
 
