@@ -124,6 +124,25 @@ def test_bad_intrinsics(tmp_path: Path, text: str, needle: str) -> None:
     assert str(p) in str(info.value)
 
 
+def test_hostile_intrinsics_are_refused_before_they_cost(tmp_path: Path) -> None:
+    """The intrinsics go through the calibration readers' bounds (docs/trust.md)."""
+    laughs = ["a: &a [x, x, x, x, x, x, x, x, x]"]
+    laughs += [f"{k}: &{k} [*{p}, *{p}, *{p}, *{p}, *{p}, *{p}, *{p}, *{p}]"
+               for p, k in zip("abcdefgh", "bcdefghi", strict=True)]  # fmt: skip
+    bomb = tmp_path / "bomb.yaml"
+    bomb.write_text("\n".join(laughs) + "\nfx: *i\n")
+    with pytest.raises(InputError, match=r"bomb\.yaml"):
+        load_intrinsics(bomb)
+    tag = tmp_path / "tag.yaml"
+    tag.write_text("fx: !!python/object/apply:os.system ['true']\n")
+    with pytest.raises(InputError, match=r"tag\.yaml"):
+        load_intrinsics(tag)
+    folder = tmp_path / "cam.json"
+    folder.mkdir()
+    with pytest.raises(InputError, match=r"cam\.json"):
+        load_intrinsics(folder)
+
+
 def test_masks_and_labels(tmp_path: Path) -> None:
     inst = np.zeros((10, 20), np.uint16)
     inst[2:5, 2:6] = 1

@@ -21,7 +21,6 @@ estimates it from the dominant support plane, or uses ``[0, -1, 0]``).
 
 from __future__ import annotations
 
-import json
 from collections.abc import Mapping
 from dataclasses import dataclass, replace
 from os import PathLike
@@ -29,7 +28,6 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import yaml
 from numpy.typing import ArrayLike, NDArray
 
 from scenespeak.errors import CalibrationError
@@ -219,35 +217,6 @@ def intrinsics_from_mapping(d: Mapping[str, Any], source: str = "intrinsics") ->
     return Intrinsics(float(fx), float(fy), float(cx), float(cy), w, h, _up(d, source), source)
 
 
-class _OpenCVYamlLoader(yaml.SafeLoader):
-    """PyYAML loader that reads OpenCV FileStorage's ``!!opencv-matrix`` as a mapping."""
-
-
-def _construct_opencv_matrix(loader: yaml.SafeLoader, node: yaml.Node) -> dict[str, Any]:
-    return dict(loader.construct_mapping(node, deep=True))
-
-
-for _tag in ("tag:yaml.org,2002:opencv-matrix", "tag:yaml.org,2002:opencv-nd-matrix"):
-    _OpenCVYamlLoader.add_constructor(_tag, _construct_opencv_matrix)
-
-
-def _parse(text: str, p: Path) -> Any:
-    if p.suffix.lower() == ".json" or text.lstrip().startswith("{"):
-        try:
-            return json.loads(text)
-        except ValueError as exc:
-            raise CalibrationError(p, f"is not valid JSON ({exc})") from None
-    lines = text.splitlines()
-    if lines and lines[0].startswith("%YAML"):
-        lines = lines[1:]  # OpenCV writes "%YAML:1.0", which PyYAML rejects
-    try:
-        return yaml.load("\n".join(lines), Loader=_OpenCVYamlLoader)
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        where = f" at line {mark.line + 1}" if mark is not None else ""
-        raise CalibrationError(p, f"is neither JSON nor valid YAML{where}") from None
-
-
 def load_intrinsics(path: str | PathLike[str]) -> Intrinsics:
     """Read a camera's intrinsics from JSON, a ROS camera_info YAML or an OpenCV YAML.
 
@@ -265,15 +234,11 @@ def load_intrinsics(path: str | PathLike[str]) -> Intrinsics:
     >>> load_intrinsics(p).size, load_intrinsics(p).up
     ((640, 480), None)
     """
+    from scenespeak.perception.calibfiles import parse_calibration
+
     p = Path(path)
-    if not p.is_file():
-        raise CalibrationError(p, "no such intrinsics file" if not p.exists() else "is not a file")
-    try:
-        text = p.read_text(encoding="utf-8")
-    except UnicodeDecodeError:
-        raise CalibrationError(p, "is not a text file (expected JSON or YAML intrinsics)") from None
-    except OSError as exc:
-        raise CalibrationError(p, f"cannot be read: {exc.strerror or exc}") from None
-    if not text.strip():
-        raise CalibrationError(p, "the file is empty")
-    return intrinsics_from_mapping(_parse(text, p), str(p))
+    if not p.exists() and not p.is_symlink():
+        raise CalibrationError(p, "no such intrinsics file")
+    # The calibration readers' bounded parsing (docs/trust.md): regular files only, size,
+    # nesting, numbers and YAML aliases bounded, OpenCV's matrix tags, no python tags.
+    return intrinsics_from_mapping(parse_calibration(p), str(p))
