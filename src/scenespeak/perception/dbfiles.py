@@ -42,6 +42,24 @@ __all__ = [
 Waiting = Callable[[str], None]
 
 
+def _publish(tmp: Path, path: Path) -> bool:
+    """Flush the finished file ``tmp`` to disk and link it in as ``path`` unless one exists.
+
+    Returns False when another process created ``path`` first (a link never replaces a file,
+    so readers never see a half-written database).
+    """
+    fd = os.open(tmp, os.O_RDONLY)
+    try:
+        os.fsync(fd)
+    finally:
+        os.close(fd)
+    try:
+        os.link(tmp, path)
+        return True
+    except FileExistsError:
+        return False
+
+
 def damaged(path: Path, where: str, problem: str) -> DatabaseError:
     """``<path>: database is damaged: <where>: <problem>`` (one line, escapes shown)."""
     return DatabaseError(path, f"database is damaged: {clean_text(where)}: {clean_text(problem)}")
@@ -116,16 +134,7 @@ def create_atomically(path: Path, build: Callable[[sqlite3.Connection], None]) -
             conn.execute("COMMIT")
         finally:
             conn.close()
-        fd = os.open(tmp, os.O_RDONLY)
-        try:
-            os.fsync(fd)
-        finally:
-            os.close(fd)
-        try:
-            os.link(tmp, path)
-            return True
-        except FileExistsError:
-            return False
+        return _publish(tmp, path)
     except sqlite3.Error as exc:
         raise DatabaseError(path, f"cannot create the database: {exc}") from None
     except OSError as exc:
@@ -433,16 +442,7 @@ def create_empty(path: Path) -> bool:
     tmp = _tmp_name(path)
     try:
         ObjectDatabase.create(tmp).close()
-        fd = os.open(tmp, os.O_RDONLY)
-        try:
-            os.fsync(fd)
-        finally:
-            os.close(fd)
-        try:
-            os.link(tmp, path)
-            return True
-        except FileExistsError:
-            return False
+        return _publish(tmp, path)
     except OSError as exc:
         from scenespeak.safeio import _os_problem
 
