@@ -475,7 +475,7 @@ def _box_objects(
             depth,
             cam,
             up,
-            surface="nearest",
+            surface="spanning",
             plane=plane,
             source="box",
             options=o,

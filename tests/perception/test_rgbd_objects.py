@@ -10,6 +10,7 @@ from scenespeak.perception.intrinsics import Intrinsics
 from scenespeak.perception.masks import Box
 from scenespeak.perception.rgbd import (
     MeasuredObject,
+    box_span,
     estimate_support_plane,
     measure_object,
     surface_modes,
@@ -162,3 +163,39 @@ def test_measure_object_returns_contract_object() -> None:
     assert isinstance(m, MeasuredObject)
     assert m.object.frame == "horizontal" and m.object.heights is not None
     assert m.object.heights.max() == pytest.approx(0.15 - rs.CAM_HEIGHT, abs=0.01)
+
+
+def _card_over_tin() -> tuple[np.ndarray, np.ndarray, list[Box]]:
+    """A tin at 1.3 m whose box is half filled by a nearer card (0.87 m) reaching into it."""
+    depth = np.full((240, 320), 3.0, np.float32)  # a wall far behind
+    inst = np.zeros((240, 320), np.uint8)
+    depth[100:160, 100:160], inst[100:160, 100:160] = 1.3, 1  # the tin
+    depth[120:200, 60:140], inst[120:200, 60:140] = 0.87, 2  # the card in front of it
+    boxes = []
+    for k, label in ((1, "tin"), (2, "card")):  # the tin's box first: measured alone first
+        ys, xs = np.nonzero(inst == k)
+        boxes.append(
+            Box(label, xs.min(), ys.min(), xs.max() - xs.min() + 1, ys.max() - ys.min() + 1)
+        )
+    return depth, inst, boxes
+
+
+def test_a_box_keeps_its_own_object_not_a_nearer_one_reaching_into_it() -> None:
+    depth, inst, boxes = _card_over_tin()
+    cam = Intrinsics(300.0, 300.0, 160.0, 120.0, 320, 240, up=(0.0, -1.0, 0.0))
+    d = describe_rgbd(None, depth, cam, boxes=boxes)
+    tin, card = d.object("tin"), d.object("card")
+    assert tin is not None and card is not None and tin.kept is not None and card.kept is not None
+    # the card fills 1600 of the tin box's 3600 pixels and is nearer; the tin spans the box
+    assert np.all(inst.ravel()[tin.kept] == 1) and len(tin.kept) == np.count_nonzero(inst == 1)
+    assert np.all(inst.ravel()[card.kept] == 2) and len(card.kept) == np.count_nonzero(inst == 2)
+    assert tin.object.centroid is not None and abs(tin.object.centroid[2] - 1.3) < 0.01
+    rel = d.relation("card", "tin")
+    assert rel is not None and rel.primary == "front"
+
+
+def test_box_span() -> None:
+    ys, xs = np.mgrid[10:20, 10:30]
+    assert box_span(ys.ravel(), xs.ravel(), (10, 10, 30, 20)) == 1.0
+    assert box_span(ys.ravel(), xs.ravel(), (0, 0, 40, 40)) == 0.125
+    assert box_span(np.array([], np.intp), np.array([], np.intp), (0, 0, 4, 4)) == 0.0

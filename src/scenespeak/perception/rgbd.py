@@ -61,6 +61,7 @@ __all__ = [
     "RGBDOptions",
     "SupportPlane",
     "backproject",
+    "box_span",
     "depth_points",
     "estimate_support_plane",
     "image_object",
@@ -68,7 +69,7 @@ __all__ = [
     "surface_modes",
 ]
 
-Surface = Literal["largest", "nearest"]
+Surface = Literal["largest", "nearest", "spanning"]
 
 
 @dataclass(frozen=True)
@@ -84,6 +85,9 @@ class RGBDOptions:
         least 2).
     box_share : float
         A box keeps its nearest mode holding at least this share of the largest mode.
+    span_share : float
+        ... and (``surface="spanning"``) spanning at least this share of the box's extent
+        that the best-spanning such mode spans (:func:`box_span`).
     min_pixels : int
         Fewer kept pixels than this: the object is skipped.
     trim : float
@@ -111,6 +115,7 @@ class RGBDOptions:
     bin_width: float = 0.01
     mode_fraction: float = 0.003
     box_share: float = 0.3
+    span_share: float = 0.8
     min_pixels: int = 20
     trim: float = 0.005
     height_points: int = 400
@@ -255,6 +260,55 @@ def _choose_mode(
     return next(m for m in modes if m[2] >= share * best[2])
 
 
+def box_span(
+    ys: NDArray[np.intp], xs: NDArray[np.intp], extent: tuple[int, int, int, int]
+) -> float:
+    """How much of a box's extent ``(x0, y0, x1, y1)`` (exclusive ends) a pixel set spans.
+
+    The product of the fractions of the box's width and height between the set's extreme
+    columns and rows: 1 for a set that touches all four sides (a detector's box is drawn
+    around the visible object), small for a part of a nearer object that only reaches into
+    a corner or a strip of it.
+
+    Examples
+    --------
+    >>> ys, xs = np.mgrid[0:10, 0:5]
+    >>> box_span(ys.ravel(), xs.ravel(), (0, 0, 10, 10))
+    0.5
+    """
+    if len(ys) == 0:
+        return 0.0
+    x0, y0, x1, y1 = extent
+    wx = (int(xs.max()) - int(xs.min()) + 1) / max(1, x1 - x0)
+    wy = (int(ys.max()) - int(ys.min()) + 1) / max(1, y1 - y0)
+    return float(min(1.0, wx) * min(1.0, wy))
+
+
+def _spanning_mode(
+    modes: list[tuple[float, float, int]],
+    ys: NDArray[np.intp],
+    xs: NDArray[np.intp],
+    z: NDArray[np.float64],
+    extent: tuple[int, int, int, int],
+    o: RGBDOptions,
+) -> tuple[float, float, int]:
+    """A box's object: the nearest substantial depth mode that spans the box.
+
+    Substantial: at least ``box_share`` of the largest mode's pixels. Spans: its
+    :func:`box_span` is at least ``span_share`` of the best substantial mode's. A nearer
+    object reaching into the box (a card in front of a tin) is nearer but spans only part
+    of it; the wall behind spans it too but is farther.
+    """
+    best = max(modes, key=lambda m: m[2])
+    cands = [m for m in modes if m[2] >= o.box_share * best[2]]
+    spans = []
+    for near, far, _ in cands:
+        sel = (z >= near) & (z <= far)
+        spans.append(box_span(ys[sel], xs[sel], extent))
+    top = max(spans)
+    return next(m for m, s in zip(cands, spans, strict=True) if s >= o.span_share * top)
+
+
 def _even(n: int, k: int) -> NDArray[np.intp]:
     """At most ``k`` evenly spread indices of ``range(n)``."""
     if n <= k:
@@ -306,6 +360,11 @@ def measure_object(
     """
     o = options or RGBDOptions()
     n_pix = len(ys)
+    extent = (
+        (int(xs.min()), int(ys.min()), int(xs.max()) + 1, int(ys.max()) + 1)
+        if n_pix
+        else (0, 0, 0, 0)
+    )
     z = np.asarray(depth[ys, xs], dtype=np.float64)
     with np.errstate(invalid="ignore"):
         ok = np.isfinite(z) & (z > 0)
@@ -321,7 +380,10 @@ def measure_object(
         ys, xs, z = ys[off], xs[off], z[off]
     modes = surface_modes(z, bin_width=o.bin_width, mode_fraction=o.mode_fraction)
     if modes:
-        near, far, _ = _choose_mode(modes, surface, o.box_share)
+        if surface == "spanning":
+            near, far, _ = _spanning_mode(modes, ys, xs, z, extent, o)
+        else:
+            near, far, _ = _choose_mode(modes, surface, o.box_share)
         keep = (z >= near) & (z <= far)
         dropped = int(len(z) - keep.sum())
         if dropped:

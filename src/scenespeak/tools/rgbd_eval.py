@@ -7,6 +7,7 @@ stdout) in these forms and scores the output against ``truth.json``:
 - ``masks``: colour + true depth + true masks;
 - ``noisy``: colour + imitation depth camera (``depth_noisy.png``) + true masks;
 - ``boxes``: colour + true depth + the masks' bounding boxes as COCO detections;
+- ``noisy-boxes``: as ``boxes`` with the imitation depth camera;
 - ``estimated-up``: as ``masks`` with ``--estimate-up`` (up from the support plane);
 - ``db``: colour + true depth + the object database (no masks);
 - ``stereo``: the stereo pair + the object database (the reference for ``db``);
@@ -39,7 +40,7 @@ import numpy as np
 
 __all__ = ["FORMS", "evaluate_scene", "main", "summarise"]
 
-FORMS = ("masks", "noisy", "boxes", "estimated-up", "db", "stereo", "image")
+FORMS = ("masks", "noisy", "boxes", "noisy-boxes", "estimated-up", "db", "stereo", "image")
 
 
 def _cli_json(args: Sequence[str]) -> tuple[int, dict[str, Any] | None, str]:
@@ -80,9 +81,10 @@ def _args(form: str, scene: Path, db: Path | None, tmp: Path) -> list[str]:
         return ["describe", *color, "--depth", str(s / "depth_noisy.png"), *rgbd, *masks]
     if form == "estimated-up":
         return ["describe", *color, "--depth", str(s / "depth.png"), *rgbd, *masks, "--estimate-up"]
-    if form == "boxes":
+    if form in ("boxes", "noisy-boxes"):
         boxes = ["--boxes", str(_boxes_file(s, tmp))]
-        return ["describe", *color, "--depth", str(s / "depth.png"), *rgbd, *boxes]
+        depth = s / ("depth.png" if form == "boxes" else "depth_noisy.png")
+        return ["describe", *color, "--depth", str(depth), *rgbd, *boxes]
     if form == "db":
         return ["describe", *color, "--depth", str(s / "depth.png"), *rgbd, "--db", str(db)]
     if form == "stereo":
