@@ -9,7 +9,7 @@ Usage:
 
 - **library**: ``load_scene(path)`` + ``ask(question, scene)`` in this process, per question;
 - **process**: the whole command ``scenespeak ask QUESTION --scene SCENE.json`` (interpreter
-  start, imports, reading, answering), wall clock.
+  start, imports, reading, answering), wall clock and CPU (user + system) of the child.
 
 Prints the load (``uptime``) first: this machine is shared.
 """
@@ -19,6 +19,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import resource
 import statistics
 import subprocess
 import sys
@@ -58,12 +59,14 @@ def library(path: Path, repeat: int) -> dict[str, float]:
     return out
 
 
-def process(path: Path, repeat: int) -> dict[str, float]:
-    """Median milliseconds of the whole ``scenespeak ask --scene`` command per question."""
+def process(path: Path, repeat: int) -> dict[str, tuple[float, float]]:
+    """Median milliseconds (wall, CPU user + system) of the whole ``scenespeak ask --scene``
+    command per question."""
     out = {}
     for q in _questions(path)[:2]:
-        times = []
+        walls, cpus = [], []
         for _ in range(max(3, repeat // 3)):
+            before = resource.getrusage(resource.RUSAGE_CHILDREN)
             t0 = time.perf_counter()
             subprocess.run(
                 [sys.executable, "-m", "scenespeak", "ask", q, "--scene", str(path)],
@@ -71,8 +74,10 @@ def process(path: Path, repeat: int) -> dict[str, float]:
                 capture_output=True,
                 env=os.environ.copy(),
             )
-            times.append(time.perf_counter() - t0)
-        out[q] = 1000 * statistics.median(times)
+            walls.append(time.perf_counter() - t0)
+            after = resource.getrusage(resource.RUSAGE_CHILDREN)
+            cpus.append(after.ru_utime - before.ru_utime + after.ru_stime - before.ru_stime)
+        out[q] = (1000 * statistics.median(walls), 1000 * statistics.median(cpus))
     return out
 
 
@@ -85,11 +90,12 @@ def main(argv: list[str] | None = None) -> int:
     lib = library(a.scene, a.repeat)
     proc = process(a.scene, a.repeat)
     print(f"scene {a.scene} ({a.scene.stat().st_size // 1024} KiB)")
-    print("| question | library ms (median) | whole process ms (median) |")
+    print("| question | library ms (median) | whole process ms, wall / CPU (median) |")
     print("| --- | --- | --- |")
     for q, ms in lib.items():
-        pm = f"{proc[q]:.0f}" if q in proc else "–"
+        pm = f"{proc[q][0]:.0f} / {proc[q][1]:.0f}" if q in proc else "–"
         print(f"| {q} | {ms:.2f} | {pm} |")
+    print("load:", subprocess.run(["uptime"], capture_output=True, text=True).stdout.strip())
     return 0
 
 

@@ -1,8 +1,9 @@
 """Start-up of the command line and of the compiled force kernel, as whole processes.
 
 * ``scenespeak --help`` (target <= 0.15 s) and ``python -c pass`` (the interpreter alone);
-* ``scenespeak ask --scene FILE`` when the ``ask`` command exists (target <= 0.3 s); else the
-  import path it will use (``scenespeak.cli`` + ``scenespeak.spatial.language``);
+* ``scenespeak ask QUESTION --scene FILE`` for each ``--scene`` given (target <= 0.3 s; the quick
+  path of ``cli/_quick.py``), and the same line through the full Typer command line
+  (``scenespeak.cli._full.main``) beside it;
 * the first force histogram of a process: Numba's on-disk cache warm, cold (a fresh
   ``NUMBA_CACHE_DIR``: the kernel is compiled), and without Numba (``SCENESPEAK_NO_NUMBA=1``).
 
@@ -10,7 +11,8 @@ Medians of several runs of each, interleaved, so that they share the machine's l
 
 Run::
 
-    python benchmarks/bench_startup.py [--repeat 7] [--scene scene.json]
+    python benchmarks/bench_startup.py [--repeat 7] [--scene scene.json [--scene viewer.json]]
+        [--only-cli]
 """
 
 from __future__ import annotations
@@ -50,38 +52,44 @@ def run_s(cmd: list[str], env: dict[str, str] | None = None) -> tuple[float, flo
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeat", type=int, default=7)
-    parser.add_argument("--scene", help="a saved scene for `scenespeak ask --scene`")
+    parser.add_argument(
+        "--scene", action="append", default=[], help="a saved scene for `ask --scene` (repeat)"
+    )
+    parser.add_argument(
+        "--only-cli", action="store_true", help="only the command-line cases (no histograms)"
+    )
     args = parser.parse_args()
     py = sys.executable
     cases: dict[str, tuple[list[str], dict[str, str] | None]] = {
         "python -c pass": ([py, "-c", "pass"], None),
         "scenespeak --help": ([py, "-m", "scenespeak", "--help"], None),
-        "import of ask's path (cli + language)": (
-            [py, "-c", "import scenespeak.cli, scenespeak.spatial.language"],
-            None,
-        ),
         "first histogram, Numba cache warm": ([py, "-c", FIRST_HISTOGRAM], None),
         "first histogram, NumPy reference (no Numba)": (
             [py, "-c", FIRST_HISTOGRAM],
             {"SCENESPEAK_NO_NUMBA": "1"},
         ),
     }
-    if args.scene:
-        cases["scenespeak ask --scene"] = (
-            [py, "-m", "scenespeak", "ask", "--scene", args.scene, "where is everything?"],
-            None,
-        )
+    for scene in args.scene:
+        line = ["ask", "where is the mug?", "--scene", scene]
+        cases[f"scenespeak ask --scene {scene}"] = ([py, "-m", "scenespeak", *line], None)
+        full = f"import sys; from scenespeak.cli._full import main; sys.exit(main({line!r}))"
+        cases[f"the same through the full CLI (Typer) {scene}"] = ([py, "-c", full], None)
+    if args.only_cli:
+        for name in [n for n in cases if "histogram" in n]:
+            del cases[name]
     print(f"load average before: {' '.join(f'{x:.2f}' for x in os.getloadavg())}\n")
     times: dict[str, list[tuple[float, float]]] = {name: [] for name in cases}
     cold: list[tuple[float, float]] = []
-    run_s(cases["first histogram, Numba cache warm"][0])  # make sure the cache is warm
+    if not args.only_cli:
+        run_s([py, "-c", FIRST_HISTOGRAM])  # make sure the cache is warm
     for _ in range(args.repeat):
         for name, (cmd, env) in cases.items():
             times[name].append(run_s(cmd, env))
-    for _ in range(max(1, args.repeat // 3)):
+    for _ in range(0 if args.only_cli else max(1, args.repeat // 3)):
         with tempfile.TemporaryDirectory() as cache:
             cold.append(run_s([py, "-c", FIRST_HISTOGRAM], {"NUMBA_CACHE_DIR": cache}))
-    times["first histogram, Numba cache cold (compiles)"] = cold
+    if cold:
+        times["first histogram, Numba cache cold (compiles)"] = cold
     print("| process | wall median (s) | wall best (s) | CPU median (s) |")
     print("| --- | ---: | ---: | ---: |")
     for name, ts in times.items():

@@ -1,64 +1,25 @@
 """The ``scenespeak`` command (see ``docs/cli.md``). It only calls the library.
 
-Every error a user can cause is a :class:`~scenespeak.errors.ScenespeakError`; :func:`main`
-catches it in one place and prints one line, ``scenespeak: error: <file>: <problem>``, on stderr
-with exit status 2. Results go to stdout (JSON stays clean); progress goes to stderr.
-
-One module per command (or command group); each registers itself on :data:`app` when imported
-below. A new command is a new module here plus one import line.
+:func:`main` is the console entry point. The commonest call of a robot's dialogue loop,
+``scenespeak ask QUESTION --scene FILE``, is answered by a small standard-library parser
+(:mod:`scenespeak.cli._quick`) without importing Typer, click or pydantic, which would cost
+more than the answer itself; every other command line, and any ``ask`` line the quick parser
+does not recognise in full, goes to the Typer application in :mod:`scenespeak.cli._full`
+(where the commands are registered: one module per command plus one import line there). Both
+give the same output, the same one-line errors and the same exit status
+(``tests/cli/test_cli_quick.py``).
 """
 
 from __future__ import annotations
 
-import contextvars
-import os
 import sys
-import warnings
 from collections.abc import Sequence
-from typing import Any
-
-import click
-import typer
-
-from scenespeak.cli import (  # noqa: F401  (each registers its command)
-    annotate,
-    ask,
-    db,
-    describe,
-    evaluate,
-    points,
-    scenes,
-    serve,
-    watch,
-)
-from scenespeak.cli._app import EXIT_INPUT, app
-from scenespeak.errors import ScenespeakError
+from typing import TYPE_CHECKING, Any
 
 __all__ = ["app", "main"]
 
-# Typer >= 0.2x vendors its own copy of click; catch either's exceptions.
-_typer_click = getattr(typer, "_click", None)
-_CLICK_ERRORS: tuple[type[Exception], ...] = tuple(
-    {click.ClickException, getattr(_typer_click, "ClickException", click.ClickException)}
-)
-_EXITS: tuple[type[Exception], ...] = tuple({click.exceptions.Exit, typer.Exit})
-_ABORTS: tuple[type[BaseException], ...] = tuple({click.exceptions.Abort, typer.Abort})
-
-
-def _error_line(exc: BaseException) -> str:
-    from scenespeak.cleantext import clean_text
-
-    return "scenespeak: error: " + clean_text(str(exc))
-
-
-def _usage_line(exc: Exception) -> str:
-    """A click/typer usage error as one line (not the multi-line usage box)."""
-    from scenespeak.cleantext import clean_text
-
-    message = str(getattr(exc, "format_message", exc.__str__)()).strip().rstrip(".")
-    ctx = getattr(exc, "ctx", None)
-    where = f" (see: {ctx.command_path} --help)" if ctx is not None else ""
-    return "scenespeak: error: " + clean_text(message) + where
+if TYPE_CHECKING:  # pragma: no cover
+    from scenespeak.cli._full import app
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -75,45 +36,20 @@ def main(argv: Sequence[str] | None = None) -> int:
     True
     """
     args = list(sys.argv[1:] if argv is None else argv)
-    command = typer.main.get_command(app)
-    if not args:
-        args = ["--help"]
-    # Each run gets its own context (the --limit values) and records library warnings instead
-    # of letting them print as extra lines: every error stays one line of ours.
-    return contextvars.copy_context().run(_run, command, args)
+    from scenespeak.cli import _quick
+
+    status = _quick.run(args)
+    if status is not None:
+        return status
+    from scenespeak.cli import _full
+
+    return _full.main(args)
 
 
-def _run(command: Any, args: list[str]) -> int:
-    # OpenCV reads this when it is first imported (by a command that needs it): its own log
-    # lines ("[ WARN:0@...]") would be extra lines beside ours.
-    os.environ.setdefault("OPENCV_LOG_LEVEL", "SILENT")
-    try:
-        with warnings.catch_warnings(record=True):
-            warnings.simplefilter("always")
-            result = command.main(args=args, prog_name="scenespeak", standalone_mode=False)
-    except ScenespeakError as exc:
-        sys.stderr.write(_error_line(exc) + "\n")
-        return EXIT_INPUT
-    except _EXITS as exc:
-        return int(getattr(exc, "exit_code", 0) or 0)
-    except _ABORTS:
-        sys.stderr.write("scenespeak: error: interrupted\n")
-        return 130
-    except _CLICK_ERRORS as exc:
-        sys.stderr.write(_usage_line(exc) + "\n")
-        code = getattr(exc, "exit_code", EXIT_INPUT)
-        return EXIT_INPUT if code in (1, 2) else int(code)
-    except BrokenPipeError:  # e.g. `scenespeak describe ... | head -1`
-        return 0
-    except RecursionError:
-        sys.stderr.write("scenespeak: error: an input is nested too deeply to process\n")
-        return EXIT_INPUT
-    except SystemExit as exc:
-        code = exc.code
-        if code is None:
-            return 0
-        if isinstance(code, int):
-            return code
-        sys.stderr.write(f"{code}\n")
-        return 1
-    return result if isinstance(result, int) else 0
+def __getattr__(name: str) -> Any:
+    # The Typer application, imported only when someone asks for it (tests, the fuzzer).
+    if name == "app":
+        from scenespeak.cli._full import app
+
+        return app
+    raise AttributeError(f"module 'scenespeak.cli' has no attribute {name!r}")

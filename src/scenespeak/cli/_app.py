@@ -17,12 +17,10 @@ from typing import Annotated, Any
 
 import typer
 
+from scenespeak.cli._quick import echo
 from scenespeak.errors import InputError
 
 __all__ = ["app"]
-
-#: Exit status for input the program could not use (like argparse's usage errors).
-EXIT_INPUT = 2
 
 
 def new_app(**options: Any) -> typer.Typer:
@@ -111,10 +109,7 @@ def _progress(total: int, description: str, quiet: bool = False) -> Any:
 
 def _echo(text: str) -> None:
     """Print a result; labels from files or the command line cannot smuggle escape sequences."""
-    from scenespeak.cleantext import clean_text
-
-    text = clean_text(text, keep_newlines=True)
-    sys.stdout.write(text if text.endswith("\n") else text + "\n")
+    echo(text)
 
 
 def _load_rig(

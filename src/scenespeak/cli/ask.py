@@ -17,6 +17,7 @@ from typing import Annotated, Any, get_args, get_origin
 import typer
 
 from scenespeak.cli._app import TextOrJson, _echo, _status, app
+from scenespeak.cli._quick import answer_saved
 from scenespeak.cli.describe import OUTPUT_OPTIONS, describe_cmd, describe_inputs
 
 __all__ = ["ask_cmd"]
@@ -38,13 +39,13 @@ def _ask(**kwargs: Any) -> None:
     scene_file: Path | None = kwargs.pop("scene")
     fmt: TextOrJson = kwargs.pop("fmt")
     quiet: bool = kwargs.pop("quiet")
-    from scenespeak.spatial.dialogue import ask, load_scene
+    if scene_file is not None:  # what the quick path (cli/_quick.py) answers without Typer
+        _echo(answer_saved(question, scene_file, fmt is TextOrJson.json))
+        return
+    from scenespeak.spatial.dialogue import ask
 
-    if scene_file is not None:
-        scene: Any = load_scene(scene_file)
-    else:
-        with _status("describing the scene", quiet):
-            scene = describe_inputs(**kwargs)
+    with _status("describing the scene", quiet):
+        scene = describe_inputs(**kwargs)
     answer = ask(question, scene)
     _echo(json.dumps(answer.to_dict()) if fmt is TextOrJson.json else answer.answer)
 

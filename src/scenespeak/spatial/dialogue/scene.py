@@ -304,6 +304,8 @@ def load_scene(path: str | PathLike[str]) -> DialogueScene:
         raise InputError(p, "no such file (save one with `describe --format json`)") from exc
     except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
         raise InputError(p, f"cannot be read as JSON ({exc})") from exc
+    except RecursionError:
+        raise InputError(p, "is nested too deeply to be a describe output") from None
     return scene_from_dict(data, str(p))
 
 
