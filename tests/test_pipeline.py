@@ -20,11 +20,11 @@ import numpy as np
 import pytest
 
 from cardscene import BASELINE, HFOV, H, W, card_pair, photo
-from scenespeak.errors import DatabaseError, ImageError
+from scenespeak.errors import DatabaseError, ImageError, InputError
 from scenespeak.perception.calibration import rig_from_short
 from scenespeak.perception.objects import SceneObject, project_to_plane
 from scenespeak.perception.recognition import ObjectDatabase
-from scenespeak.pipeline import SceneDescription, describe_files, describe_scene
+from scenespeak.pipeline import PipelineOptions, SceneDescription, describe_files, describe_scene
 
 _photo = photo
 
@@ -277,3 +277,19 @@ def test_stage_timings_are_reported(card_db: Path) -> None:
     desc = _describe(NEAR, card_db)
     assert set(desc.timings) == {"sift", "label", "stereo", "wait", "objects", "relations"}
     assert all(v >= 0.0 for v in desc.timings.values())
+
+
+def test_one_thread_gives_the_same_description_as_two(card_db: Path) -> None:
+    # threads=1 is what a cluster worker runs (one scene per core): every stage one after the
+    # other in the calling thread; the JSON must be the same as the two-thread default's
+    two = _describe(NEAR, card_db).to_dict()
+    one = _describe(NEAR, card_db, threads=1).to_dict()
+    two.pop("timings_ms", None)
+    one.pop("timings_ms", None)
+    assert one == two
+    assert len(one["objects"]) == 3
+
+
+def test_threads_other_than_one_or_two_are_refused() -> None:
+    with pytest.raises(InputError, match="threads"):
+        PipelineOptions(threads=3)

@@ -116,6 +116,11 @@ class PipelineOptions:
     geometry : bool
         Geometry first (``perception.scene_regions``): segments standing on the support plane,
         named by keypoints, depth agreeing with the object's own (False: the carried outlines).
+    threads : int
+        Threads one scene may use: 2 runs the two SIFT extractions at the same time and the
+        stereo stage beside the labelling (module docstring); 1 runs every stage one after the
+        other in the calling thread, for a process that already has one scene per core (a
+        cluster worker, :mod:`scenespeak.tools.engine`). The result is the same either way.
     """
 
     ratio: float = 0.6
@@ -137,6 +142,11 @@ class PipelineOptions:
     directions: int = 180
     summary: bool = True
     geometry: bool = True
+    threads: int = 2
+
+    def __post_init__(self) -> None:
+        if self.threads not in (1, 2):
+            raise InputError("threads", f"must be 1 or 2, got {self.threads!r}")
 
 
 @dataclass(frozen=True, eq=False)
@@ -365,6 +375,25 @@ def _relate_all(objects: tuple[SceneObject, ...], directions: int) -> list[PairR
     return relations
 
 
+class _InlineExecutor:
+    """``ThreadPoolExecutor``'s ``submit`` run at once in the calling thread (``threads=1``)."""
+
+    def __enter__(self) -> _InlineExecutor:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        return None
+
+    def submit(self, fn: Callable[..., Any], /, *args: Any, **kwargs: Any) -> Future[Any]:
+        """Run ``fn(*args, **kwargs)`` now; its result (or exception) in a finished future."""
+        future: Future[Any] = Future()
+        try:
+            future.set_result(fn(*args, **kwargs))
+        except BaseException as exc:  # handed to whoever asks for the result, as a pool does
+            future.set_exception(exc)
+        return future
+
+
 def describe_scene(
     left: NDArray[np.generic],
     right: NDArray[np.generic],
@@ -431,7 +460,8 @@ def describe_scene(
     # product took 16 ms instead of 0.1 ms on the shared 2-core machine), so BLAS runs
     # single-threaded throughout.
     say("sift")
-    with single_threaded_blas(), ThreadPoolExecutor(max_workers=1) as pool:
+    pool_cm = ThreadPoolExecutor(max_workers=1) if opts.threads > 1 else _InlineExecutor()
+    with single_threaded_blas(), pool_cm as pool:
         t0 = time.perf_counter()
         future_r = pool.submit(detect, to_gray(right), precise_upscale=False)
         feats_l = detect(to_gray(left), precise_upscale=False)

@@ -22,6 +22,7 @@ import time
 from collections import Counter
 from collections.abc import Iterator
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -169,6 +170,24 @@ def _fail_on_three(items: list[int], database: object) -> list[int]:
     if 3 in items:
         raise ValueError("three")
     return list(items)
+
+
+def _scene_options(items: list[int], database: Any) -> list[dict[str, int]]:
+    return [database.scene_options() for _ in items]
+
+
+def test_workers_describe_each_scene_in_one_thread() -> None:
+    # on a cluster each worker process is one core's worth of work: its scenes run with
+    # threads=1 (the pipeline's second thread would only fight the other workers); in this
+    # process the pipeline keeps its own default
+    here: list[dict[str, int]] = []
+    run_batches(_scene_options, [1, 2], EngineOptions(workers=1), on_results=here.extend)
+    assert here == [{}, {}]
+    there: list[dict[str, int]] = []
+    run_batches(
+        _scene_options, [1, 2, 3], EngineOptions(workers=2, batch=1), on_results=there.extend
+    )
+    assert there == [{"threads": 1}] * 3
 
 
 def test_ambiguous_flags_diagonals() -> None:

@@ -128,7 +128,7 @@ def annotate_batch(folders: Sequence[str], database: DatabaseHandle) -> list[Sce
         name = Path(folder).name
         start = time.perf_counter()
         try:
-            desc = describe_scene_folder(folder, db, summary=False)
+            desc = describe_scene_folder(folder, db, summary=False, **database.scene_options())
             lines = tuple(
                 json.dumps(pair_record(name, rel), ensure_ascii=False) for rel in desc.relations
             )

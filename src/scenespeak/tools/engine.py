@@ -182,18 +182,42 @@ class DatabaseHandle:
     In this process it opens the file once (per thread); on a worker it returns the database
     the worker's :class:`ShippedDatabase` plugin opened (the handle itself carries only the
     plugin's name, so tasks stay small).
+
+    ``scene_threads`` is how many threads one scene may use there: 1 on a cluster's worker
+    (each worker process has one core's worth of work; a second thread per scene only fights
+    the other workers), None in this process (the pipeline's own default:
+    ``PipelineOptions.threads``). Tasks pass it on as :meth:`scene_options`.
     """
 
-    def __init__(self, plugin: str | None = None, local: _OpenPerThread | None = None) -> None:
+    def __init__(
+        self,
+        plugin: str | None = None,
+        local: _OpenPerThread | None = None,
+        scene_threads: int | None = None,
+    ) -> None:
         self.plugin = plugin
         self._local = local
+        self.scene_threads = scene_threads
 
     def __getstate__(self) -> dict[str, Any]:
-        return {"plugin": self.plugin}
+        return {"plugin": self.plugin, "scene_threads": self.scene_threads}
 
     def __setstate__(self, state: dict[str, Any]) -> None:
         self.plugin = state["plugin"]
+        self.scene_threads = state.get("scene_threads")
         self._local = None
+
+    def scene_options(self) -> dict[str, Any]:
+        """Pipeline options a task adds to each scene it describes (``threads`` on a worker).
+
+        Examples
+        --------
+        >>> DatabaseHandle().scene_options()
+        {}
+        >>> DatabaseHandle("db", scene_threads=1).scene_options()
+        {'threads': 1}
+        """
+        return {} if self.scene_threads is None else {"threads": self.scene_threads}
 
     def get(self) -> ObjectDatabase | None:
         """The open database (read-only), or None when the run has none."""
@@ -365,7 +389,7 @@ def _run_on(
         client.register_plugin(plugin, name=plugin.name)
     else:
         client.register_plugin(ThreadLimits(), name=ThreadLimits.name)
-    handle = DatabaseHandle(None if plugin is None else plugin.name)
+    handle = DatabaseHandle(None if plugin is None else plugin.name, scene_threads=1)
     limit = options.in_flight or max(2, 2 * sum(client.nthreads().values()))
     pending = _batches(items, options.batch)
     batch_of: dict[Any, _Batch[T]] = {}

@@ -606,14 +606,14 @@ def evaluate_scene(scene_dir: str, db_path: str) -> SceneScore:
         return _evaluate_one(scene_dir, db)
 
 
-def _evaluate_one(scene_dir: str, db: Any) -> SceneScore:
+def _evaluate_one(scene_dir: str, db: Any, options: dict[str, Any] | None = None) -> SceneScore:
     from scenespeak.scene_folder import describe_scene_folder
 
     scene = Path(scene_dir)
     truth = load_scene_truth(scene)
     start = time.perf_counter()
     try:
-        desc = describe_scene_folder(scene, db)
+        desc = describe_scene_folder(scene, db, **(options or {}))
         pred = predicted_from_description(desc, scene.name, time.perf_counter() - start)
     except ScenespeakError as exc:
         pred = PredictedScene(scene.name, {}, {}, time.perf_counter() - start, str(exc))
@@ -624,7 +624,8 @@ def evaluate_batch(scene_dirs: Sequence[str], database: Any) -> list[SceneScore]
     """Score a batch of scene folders: the task the engine (:mod:`scenespeak.tools.engine`)
     runs on its workers, with the database its worker opened once (``database.get()``)."""
     db = database.get()
-    return [_evaluate_one(scene, db) for scene in scene_dirs]
+    options = database.scene_options() if hasattr(database, "scene_options") else {}
+    return [_evaluate_one(scene, db, options) for scene in scene_dirs]
 
 
 def evaluate(
