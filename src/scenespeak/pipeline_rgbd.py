@@ -50,6 +50,7 @@ from numpy.typing import NDArray
 
 from scenespeak.contract import SpatialObject
 from scenespeak.errors import ImageError, InputError
+from scenespeak.geometry.frames import DEFAULT_UP
 from scenespeak.perception.depth import check_depth_size
 from scenespeak.perception.intrinsics import Intrinsics
 from scenespeak.perception.masks import Box, InstanceMasks, instances_from_array
@@ -71,8 +72,6 @@ __all__ = [
     "describe_rgbd",
     "describe_stereo_masks",
 ]
-
-DEFAULT_UP: tuple[float, float, float] = (0.0, -1.0, 0.0)
 
 MasksIn = InstanceMasks | NDArray[np.integer[Any]]
 

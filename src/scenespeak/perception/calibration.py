@@ -42,6 +42,7 @@ import yaml
 from numpy.typing import ArrayLike, NDArray
 
 from scenespeak.errors import CalibrationError, ImageError
+from scenespeak.geometry.frames import DEFAULT_UP, ground_basis, heights, to_ground
 
 __all__ = [
     "DEFAULT_UP",
@@ -58,8 +59,6 @@ __all__ = [
     "to_ground",
 ]
 
-DEFAULT_UP: tuple[float, float, float] = (0.0, -1.0, 0.0)
-"""World up in the left camera's OpenCV frame for a level rig (Y points down)."""
 
 _VALID_DIST_LENGTHS = (4, 5, 8, 12, 14)
 
@@ -856,52 +855,3 @@ def rectify(rig: StereoRig, *, alpha: float = 1.0) -> Rectification:
 def _cv(image: NDArray[np.generic]) -> NDArray[np.uint8 | np.float32]:
     """An image as OpenCV's stubs want it typed (the same array)."""
     return cast("NDArray[np.uint8 | np.float32]", image)
-
-
-# --------------------------------------------------------------------------------------------
-# the ground frame
-
-
-def ground_basis(up: ArrayLike = DEFAULT_UP) -> NDArray[np.float64]:
-    """Orthonormal basis ``E`` (2, 3) of the horizontal plane: 2-D coordinates are ``E @ X``.
-
-    Row 0 (x) is the camera's right direction projected on the plane, row 1 (y) the camera's
-    forward direction projected on the plane; they are made exactly orthogonal keeping y
-    (depth) as projected, and ``x = y × up`` so the frame is right-handed seen from above.
-    When the camera looks straight along up (or down), y is taken as ``up × x``.
-
-    Examples
-    --------
-    >>> ground_basis([0, -1, 0]).round(6).tolist()
-    [[1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]
-    """
-    u = np.asarray(up, dtype=np.float64).reshape(3)
-    n = float(np.linalg.norm(u))
-    if not np.all(np.isfinite(u)) or n < 1e-12:
-        raise CalibrationError("up", f"up must be a finite non-zero 3-vector, got {u.tolist()}")
-    u = u / n
-    fwd = np.array([0.0, 0.0, 1.0])
-    y = fwd - (fwd @ u) * u
-    if np.linalg.norm(y) < 1e-6:
-        right = np.array([1.0, 0.0, 0.0])
-        x = right - (right @ u) * u
-        x /= np.linalg.norm(x)
-        y = np.cross(u, x)
-    else:
-        y /= np.linalg.norm(y)
-        x = np.cross(y, u)
-    x /= np.linalg.norm(x)
-    y /= np.linalg.norm(y)
-    return np.vstack([x, y]) + 0.0  # + 0.0 turns -0.0 into 0.0
-
-
-def to_ground(xyz: ArrayLike, up: ArrayLike = DEFAULT_UP) -> NDArray[np.float64]:
-    """Project 3-D points (N, 3) of the left camera frame onto the horizontal plane (N, 2)."""
-    return np.asarray(xyz, dtype=np.float64).reshape(-1, 3) @ ground_basis(up).T
-
-
-def heights(xyz: ArrayLike, up: ArrayLike = DEFAULT_UP) -> NDArray[np.float64]:
-    """Height of 3-D points along ``up`` (relative to the left camera centre), shape (N,)."""
-    u = np.asarray(up, dtype=np.float64).reshape(3)
-    u = u / np.linalg.norm(u)
-    return np.asarray(xyz, dtype=np.float64).reshape(-1, 3) @ u

@@ -37,8 +37,13 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial import ConvexHull, QhullError
 
-from scenespeak.errors import CalibrationError, InputError
-from scenespeak.perception.calibration import ground_basis
+from scenespeak.errors import InputError
+from scenespeak.geometry.frames import (
+    DEFAULT_UP,
+    heights_along,
+    plane_basis,
+    project_to_plane,
+)
 
 __all__ = [
     "DEFAULT_UP",
@@ -58,9 +63,6 @@ __all__ = [
     "radius_inliers",
     "scaled_radius",
 ]
-
-#: The world's up direction of a level rig in the left camera's OpenCV frame (Y points down).
-DEFAULT_UP: tuple[float, float, float] = (0.0, -1.0, 0.0)
 
 #: Width in metres of the sliver polygon that stands for a degenerate hull (two points,
 #: collinear points, or all points at one place). One centimetre: thin enough not to change where
@@ -148,72 +150,6 @@ class HullResult:
 
     polygon: NDArray[np.float64]
     degenerate: str | None = None
-
-
-def _unit(v: ArrayLike, name: str = "up") -> NDArray[np.float64]:
-    a = np.asarray(v, dtype=np.float64).reshape(-1)
-    if a.shape != (3,) or not np.all(np.isfinite(a)):
-        raise CalibrationError(name, f"must be 3 finite numbers, got {np.asarray(v).tolist()!r}")
-    n = float(np.linalg.norm(a))
-    if n < 1e-12:
-        raise CalibrationError(name, "must not be the zero vector")
-    return a / n
-
-
-def plane_basis(up: ArrayLike = DEFAULT_UP) -> NDArray[np.float64]:
-    """Orthonormal axes of the horizontal plane and up, as the rows of a 3×3 matrix.
-
-    Rows 0 and 1 are :func:`scenespeak.perception.calibration.ground_basis` (x = the camera's right
-    direction projected onto the plane, y = its forward direction projected, so depth); row 2 is
-    the unit ``up``.
-
-    Raises
-    ------
-    CalibrationError
-        If ``up`` is not three finite numbers or is the zero vector.
-
-    Examples
-    --------
-    >>> (plane_basis([0, -1, 0]).round(3) + 0.0).tolist()
-    [[1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, -1.0, 0.0]]
-    """
-    u = _unit(up)
-    return np.vstack([ground_basis(u), u])
-
-
-def project_to_plane(xyz: ArrayLike, up: ArrayLike = DEFAULT_UP) -> NDArray[np.float64]:
-    """Project 3-D points onto the horizontal plane's 2-D frame.
-
-    Parameters
-    ----------
-    xyz : (N, 3) array_like
-        Points in the left camera's OpenCV frame.
-    up : (3,) array_like
-        The world's up direction in that frame (need not be unit length).
-
-    Returns
-    -------
-    (N, 2) float64
-
-    Examples
-    --------
-    >>> project_to_plane([[0.1, 0.2, 1.5]]).tolist()
-    [[0.1, 1.5]]
-    """
-    p = np.asarray(xyz, dtype=np.float64).reshape(-1, 3)
-    return p @ ground_basis(_unit(up)).T
-
-
-def heights_along(xyz: ArrayLike, up: ArrayLike = DEFAULT_UP) -> NDArray[np.float64]:
-    """Heights of 3-D points along ``up`` (metres, relative to the camera centre).
-
-    Examples
-    --------
-    >>> heights_along([[0.0, 0.3, 1.0]]).tolist()  # 30 cm below a level camera
-    [-0.3]
-    """
-    p = np.asarray(xyz, dtype=np.float64).reshape(-1, 3)
-    return p @ _unit(up)
 
 
 def radius_inliers(xy: ArrayLike, radius: float) -> NDArray[np.bool_]:
