@@ -433,7 +433,11 @@ def describe_rgbd(
     if inst is not None:
         for k, label in enumerate(inst.labels):
             ys, xs = _mask_pixels(inst, k)
-            measured.append(measure_object(label, label, ys, xs, d, intrinsics, vec, options=o))
+            measured.append(
+                measure_object(
+                    label, label, ys, xs, d, intrinsics, vec, surface="connected", options=o
+                )
+            )
     elif boxes is not None:
         measured.extend(_box_objects(boxes, d, intrinsics, vec, plane, o))
     elif db is not None:

@@ -199,3 +199,50 @@ def test_box_span() -> None:
     assert box_span(ys.ravel(), xs.ravel(), (10, 10, 30, 20)) == 1.0
     assert box_span(ys.ravel(), xs.ravel(), (0, 0, 40, 40)) == 0.125
     assert box_span(np.array([], np.intp), np.array([], np.intp), (0, 0, 4, 4)) == 0.0
+
+
+def _grazing_box() -> tuple[np.ndarray, np.ndarray, Intrinsics]:
+    """A box 10 cm below a level camera: its front face at 0.8 m and its top face receding
+    from 0.8 to 1.05 m, seen at a grazing angle (about 15 mm of depth per row), in mm."""
+    cam = Intrinsics(554.0, 554.0, 319.5, 239.5, 640, 480, up=(0.0, -1.0, 0.0))
+    depth = np.full((480, 640), np.nan, np.float32)
+    v = np.arange(480, dtype=float)
+    with np.errstate(divide="ignore"):
+        top = 554.0 * 0.1 / (v - 239.5)  # the top face: Y = 0.1 m below the camera
+    rows_top = (top >= 0.8) & (top <= 1.05)
+    rows_front = (v > 239.5 + 554.0 * 0.1 / 0.8) & (v <= 239.5 + 554.0 * 0.2 / 0.8)
+    depth[rows_top, 250:390] = np.round(top[rows_top, None] * 1000.0) / 1000.0
+    depth[rows_front, 250:390] = 0.8
+    mask = np.isfinite(depth)
+    return depth, mask, cam
+
+
+def test_a_grazing_top_face_is_kept_with_its_front_face() -> None:
+    depth, mask, cam = _grazing_box()
+    ys, xs = np.nonzero(mask)
+    z = depth[ys, xs].astype(float)
+    surface = np.column_stack([(xs - cam.cx) * z / cam.fx, (ys - cam.cy) * z / cam.fy, z])
+    truth = surface.mean(axis=0)
+    up = (0.0, -1.0, 0.0)
+    obj = measure_object("box", "box", ys, xs, depth, cam, up, surface="connected")
+    assert isinstance(obj, MeasuredObject) and obj.kept_pixels == len(ys)
+    assert obj.object.centroid is not None
+    assert np.linalg.norm(obj.object.centroid - truth) < 1e-3
+    # the depth modes alone cut the top face (rows 15 mm apart leave empty bins between them)
+    only_mode = measure_object("box", "box", ys, xs, depth, cam, up, surface="largest")
+    assert isinstance(only_mode, MeasuredObject) and only_mode.object.centroid is not None
+    assert np.linalg.norm(only_mode.object.centroid - truth) > 0.01
+    # and through describe_rgbd (masks keep the connected surface)
+    d = describe_rgbd(None, depth, cam, masks=mask.astype(np.uint8), labels={1: "box"})
+    assert np.linalg.norm(d.objects[0].object.centroid - truth) < 1e-3
+
+
+def test_a_wall_inside_a_mask_does_not_join_the_object() -> None:
+    depth, mask, cam = _grazing_box()
+    depth[mask.any(axis=1), 390:400] = 2.5  # a sloppy mask: ten columns of wall beside it
+    mask = np.isfinite(depth)
+    ys, xs = np.nonzero(mask)
+    obj = measure_object("box", "box", ys, xs, depth, cam, (0.0, -1.0, 0.0), surface="connected")
+    assert isinstance(obj, MeasuredObject)
+    assert obj.kept is not None and np.all(obj.kept % 640 < 390)
+    assert obj.kept_pixels == np.count_nonzero(mask[:, :390])

@@ -15,8 +15,11 @@ spatial half) wrapped in :class:`MeasuredObject`, which adds what perception kno
    (depth noise of a triangulating sensor grows with ``Z^2``: ``sigma_Z = Z^2 sigma_d / (f b)``,
    Khoshelham & Elberink 2012, eq. 9); a mode is a run of bins that each hold at least
    ``mode_fraction`` of the pixels, so thinly spread flying pixels never join the surface.
-   A mask keeps its largest mode; a box or a recognised outline keeps the nearest mode that
-   holds at least ``box_share`` of the largest one, after the support plane's pixels are
+   A mask keeps its largest mode and the pixels depth-continuous with it (a face seen at a
+   grazing angle, :func:`~scenespeak.perception.surfaces.connected_surface`); a recognised
+   outline keeps the nearest mode that holds at least ``box_share`` of the largest one, and
+   a box the nearest such mode that spans the box
+   (:func:`~scenespeak.perception.surfaces.box_span`), after the support plane's pixels are
    removed (the floor under an object is as near as the object's base).
 3. **The support plane and up** (:func:`estimate_support_plane`): RANSAC (Fischler & Bolles
    1981) over a grid sample of the background pixels, among planes whose normal is within
@@ -55,6 +58,7 @@ from numpy.typing import ArrayLike, NDArray
 from scenespeak.contract import SpatialObject
 from scenespeak.perception.intrinsics import Intrinsics
 from scenespeak.perception.objects import Skipped, convex_hull, plane_basis
+from scenespeak.perception.surfaces import box_span, connected_surface, surface_modes
 
 __all__ = [
     "MeasuredObject",
@@ -62,6 +66,7 @@ __all__ = [
     "SupportPlane",
     "backproject",
     "box_span",
+    "connected_surface",
     "depth_points",
     "estimate_support_plane",
     "image_object",
@@ -69,7 +74,7 @@ __all__ = [
     "surface_modes",
 ]
 
-Surface = Literal["largest", "nearest", "spanning"]
+Surface = Literal["largest", "nearest", "spanning", "connected"]
 
 
 @dataclass(frozen=True)
@@ -88,6 +93,9 @@ class RGBDOptions:
     span_share : float
         ... and (``surface="spanning"``) spanning at least this share of the box's extent
         that the best-spanning such mode spans (:func:`box_span`).
+    continuity_deg : float
+        ``surface="connected"`` (masks): neighbouring pixels on a surface up to this angle to
+        the viewing ray are continuous (:func:`connected_surface`).
     min_pixels : int
         Fewer kept pixels than this: the object is skipped.
     trim : float
@@ -116,6 +124,7 @@ class RGBDOptions:
     mode_fraction: float = 0.003
     box_share: float = 0.3
     span_share: float = 0.8
+    continuity_deg: float = 88.0
     min_pixels: int = 20
     trim: float = 0.005
     height_points: int = 400
@@ -207,50 +216,6 @@ def depth_points(depth: NDArray[np.floating], cam: Intrinsics) -> NDArray[np.flo
     return backproject(us, vs, depth[vs, us], cam)
 
 
-def surface_modes(
-    z: NDArray[np.floating], *, bin_width: float = 0.01, mode_fraction: float = 0.01
-) -> list[tuple[float, float, int]]:
-    """The dense depth intervals of a pixel set: ``(near, far, pixels)`` per mode, nearest first.
-
-    Bins are ``bin_width * mean(Z)^2`` wide (at least 2 mm). A mode is a maximal run of bins
-    each holding at least a tenth of ``t = max(2, mode_fraction * len(z))`` pixels (and at
-    least 2) that contains a bin of at least ``t`` (hysteresis, as Canny's edge thresholds): a
-    surface receding from the camera (a box's top seen at a grazing angle) thins out but never
-    breaks, while flying pixels strewn between an object and its background are too sparse
-    to join.
-
-    Examples
-    --------
-    >>> z = np.r_[np.full(500, 1.0), np.linspace(1.0, 2.0, 20), np.full(300, 2.0)]
-    >>> [(round(a, 2), round(b, 2), n) for a, b, n in surface_modes(z)]
-    [(1.0, 1.02, 501), (1.99, 2.01, 301)]
-    """
-    zz = np.asarray(z, np.float64)
-    zz = zz[np.isfinite(zz)]
-    if len(zz) == 0:
-        return []
-    zmid = float(zz[len(zz) // 2]) if len(zz) < 64 else float(np.mean(zz))
-    width = max(0.002, bin_width * zmid * zmid)
-    lo = float(zz.min())
-    nb = int((float(zz.max()) - lo) / width) + 1
-    idx = ((zz - lo) / width).astype(np.intp)
-    counts = np.bincount(idx, minlength=nb)
-    high = max(2.0, mode_fraction * len(zz))
-    core = counts >= high
-    if not core.any():
-        core = counts == counts.max()
-    weak = (counts >= max(2.0, 0.1 * high)) | core
-    edges = np.flatnonzero(np.diff(np.r_[0, weak.astype(np.int8), 0]))
-    starts, stops = edges[::2], edges[1::2]
-    ccore = np.r_[0, np.cumsum(core)]
-    csum = np.r_[0, np.cumsum(counts)]
-    return [
-        (lo + a * width, lo + b * width, int(csum[b] - csum[a]))
-        for a, b in zip(starts.tolist(), stops.tolist(), strict=True)
-        if ccore[b] > ccore[a]
-    ]
-
-
 def _choose_mode(
     modes: list[tuple[float, float, int]], surface: Surface, share: float
 ) -> tuple[float, float, int]:
@@ -258,30 +223,6 @@ def _choose_mode(
     if surface == "largest":
         return best
     return next(m for m in modes if m[2] >= share * best[2])
-
-
-def box_span(
-    ys: NDArray[np.intp], xs: NDArray[np.intp], extent: tuple[int, int, int, int]
-) -> float:
-    """How much of a box's extent ``(x0, y0, x1, y1)`` (exclusive ends) a pixel set spans.
-
-    The product of the fractions of the box's width and height between the set's extreme
-    columns and rows: 1 for a set that touches all four sides (a detector's box is drawn
-    around the visible object), small for a part of a nearer object that only reaches into
-    a corner or a strip of it.
-
-    Examples
-    --------
-    >>> ys, xs = np.mgrid[0:10, 0:5]
-    >>> box_span(ys.ravel(), xs.ravel(), (0, 0, 10, 10))
-    0.5
-    """
-    if len(ys) == 0:
-        return 0.0
-    x0, y0, x1, y1 = extent
-    wx = (int(xs.max()) - int(xs.min()) + 1) / max(1, x1 - x0)
-    wy = (int(ys.max()) - int(ys.min()) + 1) / max(1, y1 - y0)
-    return float(min(1.0, wx) * min(1.0, wy))
 
 
 def _spanning_mode(
@@ -344,9 +285,11 @@ def measure_object(
         The depth image's (= the colour image's) camera.
     up : (3,) array_like
         World up in the camera frame.
-    surface : {"largest", "nearest"}
-        Which depth mode is the object: the largest (a mask) or the nearest substantial one
-        (a box, an outline: the wall behind is farther).
+    surface : {"largest", "connected", "nearest", "spanning"}
+        Which depth mode is the object: the largest; the largest and the pixels
+        depth-continuous with it (a mask: :func:`connected_surface`); the nearest substantial
+        one (an outline: the wall behind is farther); the nearest substantial one that spans
+        the region's extent (a box: :func:`box_span`).
     plane : SupportPlane, optional
         Pixels on it are dropped first (for boxes and outlines).
     source : str
@@ -378,20 +321,10 @@ def measure_object(
         if (~off).any():
             notes.append(f"{int((~off).sum())} pixels on the support plane dropped")
         ys, xs, z = ys[off], xs[off], z[off]
-    modes = surface_modes(z, bin_width=o.bin_width, mode_fraction=o.mode_fraction)
-    if modes:
-        if surface == "spanning":
-            near, far, _ = _spanning_mode(modes, ys, xs, z, extent, o)
-        else:
-            near, far, _ = _choose_mode(modes, surface, o.box_share)
-        keep = (z >= near) & (z <= far)
-        dropped = int(len(z) - keep.sum())
-        if dropped:
-            notes.append(
-                f"{dropped} pixels off the object's surface dropped "
-                f"(kept depth {near:.2f}-{far:.2f} m)"
-            )
-            ys, xs, z = ys[keep], xs[keep], z[keep]
+    keep, note = _surface_pixels(ys, xs, z, surface, extent, cam, o)
+    if note:
+        notes.append(note)
+        ys, xs, z = ys[keep], xs[keep], z[keep]
     xyz = backproject(xs, ys, z, cam)
     if len(xyz) < o.min_pixels:
         return Skipped(
@@ -406,6 +339,43 @@ def measure_object(
         kept_pixels=len(xyz),
         notes=tuple(notes),
         kept=ys.astype(np.intp) * depth.shape[1] + xs,
+    )
+
+
+def _surface_pixels(
+    ys: NDArray[np.intp],
+    xs: NDArray[np.intp],
+    z: NDArray[np.float64],
+    surface: Surface,
+    extent: tuple[int, int, int, int],
+    cam: Intrinsics,
+    o: RGBDOptions,
+) -> tuple[NDArray[np.bool_], str]:
+    """Which pixels are the object's own surface, and the note saying what was dropped."""
+    modes = surface_modes(z, bin_width=o.bin_width, mode_fraction=o.mode_fraction)
+    if not modes:
+        return np.ones(len(z), dtype=bool), ""
+    if surface == "spanning":
+        near, far, _ = _spanning_mode(modes, ys, xs, z, extent, o)
+    else:
+        near, far, _ = _choose_mode(
+            modes, "largest" if surface == "connected" else surface, o.box_share
+        )
+    keep = (z >= near) & (z <= far)
+    joined = 0
+    if surface == "connected" and not keep.all():
+        grown = connected_surface(
+            ys, xs, z, keep, cam, bin_width=o.bin_width, continuity_deg=o.continuity_deg
+        )
+        joined = int(np.count_nonzero(grown & ~keep))
+        keep = grown
+    dropped = int(len(z) - keep.sum())
+    if not dropped:
+        return keep, ""
+    extra = f", and {joined} depth-continuous with it" if joined else ""
+    return keep, (
+        f"{dropped} pixels off the object's surface dropped "
+        f"(kept depth {near:.2f}-{far:.2f} m{extra})"
     )
 
 
