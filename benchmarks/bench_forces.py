@@ -171,7 +171,8 @@ def rasterise(polys: list[Array], size: int) -> list[NDArray[np.bool_]]:
 
 def _write_pgm(path: Path, mask: NDArray[np.bool_]) -> None:
     h, w = mask.shape
-    path.write_bytes(f"P5 {w} {h} 255\n".encode() + (mask.astype(np.uint8) * 255).tobytes())
+    # Three header lines: MW's readPGM reads "P5", then "width height", then the maximum.
+    path.write_bytes(f"P5\n{w} {h}\n255\n".encode() + (mask.astype(np.uint8) * 255).tobytes())
 
 
 def mw_ms(binary: str, a: NDArray[np.bool_], b: NDArray[np.bool_], repeat: int) -> float:

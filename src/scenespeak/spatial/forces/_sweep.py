@@ -119,13 +119,14 @@ def _tables(
     first: bool,
     tab: np.ndarray,
     extent: np.ndarray,
+    srt: np.ndarray,
 ) -> None:
     """Every region's edge table for direction (c, s), each sorted by the edge's ``v_lo``.
 
     ``tab[e]`` is ``[v_lo, v_hi, s(v_lo), ds/dv, sign(dv)]`` of edge ``e``; ``perm`` lists
     each region's edges by ``v_lo`` in its own
     region's frame (``pts`` are relative to the region's origin); ``extent[g]`` is region g's
-    range of ``v``.
+    range of ``v``; ``srt[j]`` is ``tab[perm[j]]`` (the rows in sorted order).
     """
     n_regions = region_start.size - 1
     for g in range(n_regions):
@@ -164,14 +165,25 @@ def _tables(
             for j in range(hi_g - lo_g):
                 perm[lo_g + j] = lo_g + order[j]
         else:
+            # The keys in the previous order, contiguous, so that the shifts read and write
+            # neighbouring memory (srt's first column is free until the gather below).
+            for j in range(lo_g, hi_g):
+                srt[j, 0] = tab[perm[j], 0]
             for j in range(lo_g + 1, hi_g):
                 key = perm[j]
-                kv = tab[key, 0]
+                kv = srt[j, 0]
                 i = j - 1
-                while i >= lo_g and tab[perm[i], 0] > kv:
+                while i >= lo_g and srt[i, 0] > kv:
                     perm[i + 1] = perm[i]
+                    srt[i + 1, 0] = srt[i, 0]
                     i -= 1
                 perm[i + 1] = key
+                srt[i + 1, 0] = kv
+        # The rows in that order, contiguous: the walks read them one after the other.
+        for j in range(lo_g, hi_g):
+            e = perm[j]
+            for q in range(5):
+                srt[j, q] = tab[e, q]
 
 
 @jit
@@ -280,6 +292,116 @@ def _integrate(
 
 
 @jit
+def _f0_f2_terms(d0: float, d1: float, weight: float) -> tuple[float, float, float, float]:
+    """One edge pair's F0 and F2 terms at θ and at θ + π (``_integrate`` for codes 0 and 1).
+
+    The same operations as :func:`_mean_phi` for those two kernels, inlined: the gap goes
+    linearly from ``d0`` to ``d1``; where it is negative the pair serves θ + π.
+    """
+    if d0 * d1 < 0.0:
+        top = d0 if d0 > d1 else d1
+        bottom = d1 if d0 > d1 else d0
+        frac = top / (abs(d0) + abs(d1))
+        w_pos = weight * frac
+        w_neg = weight * (1.0 - frac)
+        nb = -bottom
+        return (
+            w_pos * (top * top / 6.0),
+            w_pos * _mean_f2(0.0, top),
+            w_neg * (nb * nb / 6.0),
+            w_neg * _mean_f2(0.0, nb),
+        )
+    if d0 + d1 < 0.0:
+        a0 = -d0
+        a1 = -d1
+        return 0.0, 0.0, weight * ((a0 * a0 + a0 * a1 + a1 * a1) / 6.0), weight * _mean_f2(a0, a1)
+    return weight * ((d0 * d0 + d0 * d1 + d1 * d1) / 6.0), weight * _mean_f2(d0, d1), 0.0, 0.0
+
+
+@jit
+def _mean_f2(a0: float, a1: float) -> float:
+    """:func:`_mean_phi` for gravitational forces (code 1), inlined."""
+    h = a1 - a0
+    m = 0.5 * (a0 + a1)
+    if abs(h) <= TAYLOR_RATIO * m:
+        if m > 0.0:
+            return -math.log(m) + (1.0 / (m * m)) * h * h / 24.0
+        return 0.0
+    p0 = a0 - a0 * math.log(a0) if a0 > 0.0 else 0.0
+    p1 = a1 - a1 * math.log(a1) if a1 > 0.0 else 0.0
+    return (p1 - p0) / h
+
+
+@jit
+def _pair_terms(
+    srt: np.ndarray, e: int, f: int, dvb: float, dsb: float
+) -> tuple[float, float, float, float]:
+    """:func:`_f0_f2_terms` of A-edge row ``e`` and B-edge row ``f`` (B shifted by dvb, dsb)."""
+    lo_a = srt[e, 0]
+    hi_a = srt[e, 1]
+    lo_b = srt[f, 0] + dvb
+    hi_b = srt[f, 1] + dvb
+    lo = lo_a if lo_a > lo_b else lo_b
+    hi = hi_a if hi_a < hi_b else hi_b
+    if not hi > lo:
+        return 0.0, 0.0, 0.0, 0.0
+    weight = (srt[e, 4] * srt[f, 4]) * (lo - hi)
+    if weight == 0.0:
+        return 0.0, 0.0, 0.0, 0.0
+    s_a = srt[e, 2]
+    k_a = srt[e, 3]
+    s_b = srt[f, 2] + dsb
+    k_b = srt[f, 3]
+    d0 = (s_a + k_a * (lo - lo_a)) - (s_b + k_b * (lo - lo_b))
+    d1 = (s_a + k_a * (hi - lo_a)) - (s_b + k_b * (hi - lo_b))
+    return _f0_f2_terms(d0, d1, weight)
+
+
+@jit
+def _walk_f0_f2(
+    srt: np.ndarray, a0: int, a1: int, b0: int, b1: int, dvb: float, dsb: float
+) -> tuple[float, float, float, float]:
+    """F0 and F2 of one pair in one direction: :func:`_collect`'s two-pointer walk over the
+    sorted rows, each edge pair integrated on the spot (no buffer), sums kept in registers.
+
+    Returns ``(F0(θ), F2(θ), F0(θ + π), F2(θ + π))``.
+    """
+    t0 = 0.0
+    t2 = 0.0
+    p0 = 0.0
+    p2 = 0.0
+    j = b0
+    for i in range(a0, a1):
+        lo_a = srt[i, 0]
+        hi_a = srt[i, 1]
+        while j < b1 and srt[j, 0] + dvb < lo_a:
+            j += 1
+        jj = j
+        while jj < b1 and srt[jj, 0] + dvb < hi_a:
+            x0, x2, y0_, y2 = _pair_terms(srt, i, jj, dvb, dsb)
+            t0 += x0
+            t2 += x2
+            p0 += y0_
+            p2 += y2
+            jj += 1
+    i = a0
+    for j in range(b0, b1):
+        lo_b = srt[j, 0] + dvb
+        hi_b = srt[j, 1] + dvb
+        while i < a1 and srt[i, 0] <= lo_b:
+            i += 1
+        ii = i
+        while ii < a1 and srt[ii, 0] < hi_b:
+            x0, x2, y0_, y2 = _pair_terms(srt, ii, j, dvb, dsb)
+            t0 += x0
+            t2 += x2
+            p0 += y0_
+            p2 += y2
+            ii += 1
+    return t0, t2, p0, p2
+
+
+@jit
 def sweep(
     pts: np.ndarray,
     nxt: np.ndarray,
@@ -322,13 +444,16 @@ def sweep(
     tab = np.empty((pts.shape[0], 5))
     perm = np.empty(pts.shape[0], dtype=np.int64)
     extent = np.empty((region_start.size - 1, 2))
+    srt = np.empty((pts.shape[0], 5))
     buf = np.empty((1024, 2), dtype=np.int64)
     acc = np.empty((2, n_k))
+    # F0 + F2 (what every caller of f0_f2_pairs and force_histograms() asks for): fused walk.
+    fast = n_k == 2 and codes[0] == 0 and codes[1] == 1
     for d in range(half):
         theta = 2.0 * math.pi * d / directions
         c = math.cos(theta)
         s = math.sin(theta)
-        _tables(c, s, pts, nxt, region_start, perm, d == 0, tab, extent)
+        _tables(c, s, pts, nxt, region_start, perm, d == 0, tab, extent, srt)
         for p in range(n_pairs):
             ga = pair_a[p]
             gb = pair_b[p]
@@ -339,6 +464,14 @@ def sweep(
                 continue  # no line of this direction meets both objects
             a0, a1 = region_start[ga], region_start[ga + 1]
             b0, b1 = region_start[gb], region_start[gb + 1]
+            if fast:
+                t0, t2, q0, q2 = _walk_f0_f2(srt, a0, a1, b0, b1, dvb, ox * c + oy * s)
+                out[p, 0, d] += t0
+                out[p, 1, d] += t2
+                if both:
+                    out[p, 0, d + half] += q0
+                    out[p, 1, d + half] += q2
+                continue
             count = _collect(tab, perm, a0, a1, b0, b1, dvb, buf)
             if count < 0:
                 buf = np.empty((2 * -count, 2), dtype=np.int64)
