@@ -4,7 +4,9 @@
 * ``scenespeak ask QUESTION --scene FILE`` for each ``--scene`` given (target <= 0.3 s; the quick
   path of ``cli/_quick.py``), and the same line through the full Typer command line
   (``scenespeak.cli._full.main``) beside it;
-* the first force histogram of a process: Numba's on-disk cache warm, cold (a fresh
+* the first force histogram of a process: by default (``SCENESPEAK_NUMBA=auto``: the NumPy
+  reference until the process's work pays for loading Numba), with Numba forced
+  (``SCENESPEAK_NUMBA=always``) and its on-disk cache warm or cold (a fresh
   ``NUMBA_CACHE_DIR``: the kernel is compiled), and without Numba (``SCENESPEAK_NO_NUMBA=1``).
 
 Medians of several runs of each, interleaved, so that they share the machine's load.
@@ -63,7 +65,14 @@ def main() -> None:
     cases: dict[str, tuple[list[str], dict[str, str] | None]] = {
         "python -c pass": ([py, "-c", "pass"], None),
         "scenespeak --help": ([py, "-m", "scenespeak", "--help"], None),
-        "first histogram, Numba cache warm": ([py, "-c", FIRST_HISTOGRAM], None),
+        "first histogram, default (auto: reference for small work)": (
+            [py, "-c", FIRST_HISTOGRAM],
+            {"SCENESPEAK_NUMBA": "auto"},
+        ),
+        "first histogram, Numba forced, cache warm": (
+            [py, "-c", FIRST_HISTOGRAM],
+            {"SCENESPEAK_NUMBA": "always"},
+        ),
         "first histogram, NumPy reference (no Numba)": (
             [py, "-c", FIRST_HISTOGRAM],
             {"SCENESPEAK_NO_NUMBA": "1"},
@@ -81,13 +90,14 @@ def main() -> None:
     times: dict[str, list[tuple[float, float]]] = {name: [] for name in cases}
     cold: list[tuple[float, float]] = []
     if not args.only_cli:
-        run_s([py, "-c", FIRST_HISTOGRAM])  # make sure the cache is warm
+        run_s([py, "-c", FIRST_HISTOGRAM], {"SCENESPEAK_NUMBA": "always"})  # warm the cache
     for _ in range(args.repeat):
         for name, (cmd, env) in cases.items():
             times[name].append(run_s(cmd, env))
     for _ in range(0 if args.only_cli else max(1, args.repeat // 3)):
         with tempfile.TemporaryDirectory() as cache:
-            cold.append(run_s([py, "-c", FIRST_HISTOGRAM], {"NUMBA_CACHE_DIR": cache}))
+            env = {"NUMBA_CACHE_DIR": cache, "SCENESPEAK_NUMBA": "always"}
+            cold.append(run_s([py, "-c", FIRST_HISTOGRAM], env))
     if cold:
         times["first histogram, Numba cache cold (compiles)"] = cold
     print("| process | wall median (s) | wall best (s) | CPU median (s) |")

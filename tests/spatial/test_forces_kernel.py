@@ -9,6 +9,7 @@ cannot be written must not stop it.
 
 from __future__ import annotations
 
+import math
 import os
 import subprocess
 import sys
@@ -29,6 +30,14 @@ from scenespeak.spatial.forces.reference import _edge_pair_histograms, _Kernel
 Array = NDArray[np.float64]
 
 pytestmark = pytest.mark.skipif(not _jit.available(), reason="numba is not installed")
+
+
+@pytest.fixture(autouse=True)
+def _compiled_kernel(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Every sweep of these tests runs compiled (the default policy would run small ones in
+    the reference until the process has done enough work to pay for loading Numba)."""
+    monkeypatch.setenv(_jit.POLICY_ENV, "always")
+
 
 KERNELS = [
     (kernel.KernelSpec(0.0), _Kernel(0.0)),
@@ -159,7 +168,7 @@ def test_without_numba_the_reference_runs(monkeypatch: pytest.MonkeyPatch) -> No
     with pytest.raises(InputError, match="cross or touch") as err:
         forces.prepare(bow, "bow")
     message = str(err.value)
-    monkeypatch.setattr(_jit, "available", lambda: False)
+    monkeypatch.setenv(_jit.POLICY_ENV, "never")
     assert not forces.compiled()
     plain = forces.force_histograms(a, b, directions=90)
     ra, rb = forces.prepare(a, "a"), forces.prepare(b, "b")
@@ -222,7 +231,83 @@ def test_unwritable_cache_directory_does_not_crash(tmp_path: os.PathLike[str]) -
         h = force_histograms(sq + [3.0, 0.0], sq, directions=8)
         print(compiled(), round(float(h[0, 0]), 12))
         """,
-        {"NUMBA_CACHE_DIR": os.path.join(blocker, "cache")},
+        {"NUMBA_CACHE_DIR": os.path.join(blocker, "cache"), _jit.POLICY_ENV: "always"},
     )
     assert out.returncode == 0, out.stderr
     assert out.stdout.split() == ["True", "1.0"]
+
+
+def test_auto_policy_loads_numba_only_when_the_work_pays_for_it() -> None:
+    """A short process stays on the reference; a big sweep loads Numba (``_jit.wanted``)."""
+    out = _run(
+        """
+        import sys
+        import numpy as np
+        from scenespeak.spatial import forces
+        sq = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
+        forces.force_histograms(sq + [3.0, 0.0], sq)
+        small = "numba" in sys.modules
+        objs = [forces.prepare(sq + [3.0 * k, 0.0], f"o{k}") for k in range(70)]
+        forces.f0_f2_pairs(objs, directions=180)  # 2415 pairs: about 0.6 s of reference
+        print(small, "numba" in sys.modules)
+        """,
+        {_jit.POLICY_ENV: "auto"},
+    )
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.split() == ["False", "True"]
+
+
+def test_auto_policy_adds_up_small_sweeps(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setenv(_jit.POLICY_ENV, "auto")
+    monkeypatch.setattr(_jit, "_SPENT", [0.0])
+    monkeypatch.setattr(_jit, "loaded", lambda: False)
+    monkeypatch.setattr(_jit, "_numba", lambda: object())  # stands for the module: no import
+    per_call = _jit.reference_seconds(1, 60 * 180)
+    calls = math.ceil(_jit.LOAD_SECONDS / per_call)  # small calls that add up to the load
+    got = [_jit.wanted(1, 60 * 180) for _ in range(calls + 5)]
+    first = got.index(True)
+    assert abs(first - (calls - 1)) <= 1 and all(got[first:])
+    monkeypatch.setenv(_jit.POLICY_ENV, "never")
+    assert not _jit.wanted(10**6, 10**12)
+
+
+def _random_masks(seed: int, count: int) -> list[NDArray[np.bool_]]:
+    rng = np.random.default_rng(seed)
+    out = []
+    for _ in range(count):
+        shape = (int(rng.integers(3, 40)), int(rng.integers(3, 40)))
+        out.append(np.pad(rng.random(shape) < rng.uniform(0.2, 0.8), 1))
+    return out
+
+
+def _canonical(rings: list[Array]) -> list[tuple[tuple[float, float], ...]]:
+    """Rings as tuples of points starting at their smallest (row, col), sorted."""
+    out = []
+    for c in rings:
+        first = int(np.lexsort((c[:, 1], c[:, 0]))[0])
+        out.append(tuple(map(tuple, np.roll(c, -first, axis=0).tolist())))
+    return sorted(out)
+
+
+def test_traced_rings_are_scikit_images_contours(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The marching-squares tracer gives find_contours' rings (8-connected objects, the same
+    orientation), compiled and in NumPy alike, on random masks with holes and saddles."""
+    from skimage.measure import find_contours
+
+    from scenespeak.spatial.forces import _trace
+
+    for padded in _random_masks(0, 150):
+        ref = []
+        for c in find_contours(
+            padded.astype(float), 0.5, fully_connected="high", positive_orientation="high"
+        ):
+            ref.append(c[:-1] if np.array_equal(c[0], c[-1]) else c)
+        monkeypatch.setenv(_jit.POLICY_ENV, "always")
+        forces.force_histograms(np.eye(2, dtype=bool), np.eye(2, dtype=bool)[::-1], (0.0,), 4)
+        compiled_rings = _trace.rings(padded)
+        monkeypatch.setenv(_jit.POLICY_ENV, "never")
+        numpy_rings = _trace.rings(padded)
+        assert _canonical(compiled_rings) == _canonical(ref)
+        assert len(compiled_rings) == len(numpy_rings)
+        for x, y in zip(compiled_rings, numpy_rings, strict=True):
+            np.testing.assert_array_equal(x, y)

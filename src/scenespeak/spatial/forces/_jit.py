@@ -1,23 +1,32 @@
-"""Whether the compiled kernel is available, and the decorator that compiles it (private).
+"""Whether the compiled kernel is used, and the decorator that compiles it (private).
 
 Numba (the ``fast`` extra) compiles :mod:`~scenespeak.spatial.forces._sweep` to machine code
 the first time it runs and keeps the result on disk (``cache=True``), so later processes load
-it in milliseconds instead of compiling again. Where the cache goes, in Numba's order: the
-directory in ``NUMBA_CACHE_DIR`` if set; else ``__pycache__`` next to the source if writable;
-else the user's cache directory; and if none of them can be written (a read-only install with
-no writable home) a private directory under the system's temporary directory. If even that
-fails the kernel is compiled in memory for each process: slower to start, never an error.
+it instead of compiling again. Where the cache goes, in Numba's order: the directory in
+``NUMBA_CACHE_DIR`` if set; else ``__pycache__`` next to the source if writable; else the
+user's cache directory; and if none of them can be written (a read-only install with no
+writable home) a private directory under the system's temporary directory. If even that fails
+the kernel is compiled in memory for each process: slower to start, never an error.
 
-Without Numba, or with the environment variable ``SCENESPEAK_NO_NUMBA=1``, :func:`available`
-is False and the force histograms use the NumPy reference (the same results to 1e-9
-relative; tested). Numba is imported on the first histogram, not with the package (it takes
-about 0.3 s), so commands that compute none never pay for it.
+Loading is not free: importing Numba and loading the cached kernel cost a process about half
+a second of CPU (``benchmarks/bench_startup.py``), while the NumPy reference computes a small
+pair in well under a millisecond. So by default (``SCENESPEAK_NUMBA=auto``) a process uses the
+reference until the work it has given the force sweep would have paid for loading Numba: as
+soon as one call, or the calls so far together, are estimated to cost the reference
+:data:`LOAD_SECONDS` (:func:`reference_seconds`, measured), Numba is loaded and used from then
+on. The few histograms of a short command cost what the reference costs; a scene of a hundred
+objects, a stream or a dataset runs compiled from its first call (or after about half a second).
+Both give the same histograms to 1e-9 relative (``tests/spatial/test_forces_kernel.py``).
+
+``SCENESPEAK_NUMBA=always`` loads Numba on the first histogram (benchmarks of the kernel);
+``SCENESPEAK_NO_NUMBA=1`` (or ``SCENESPEAK_NUMBA=never``) never imports it.
 """
 
 from __future__ import annotations
 
 import functools
 import importlib
+import importlib.util
 import os
 import tempfile
 from collections.abc import Callable
@@ -27,24 +36,77 @@ F = TypeVar("F", bound=Callable[..., Any])
 
 #: Set to "1" to use the NumPy reference even where Numba is installed.
 DISABLE_ENV = "SCENESPEAK_NO_NUMBA"
+#: ``auto`` (default), ``always`` or ``never``.
+POLICY_ENV = "SCENESPEAK_NUMBA"
+
+#: CPU seconds that importing Numba and loading the cached kernel cost a process (measured
+#: with ``benchmarks/bench_startup.py``: 0.3 s import + 0.2-0.3 s cache load on an idle core).
+LOAD_SECONDS = 0.5
 
 _OPTIONS: dict[str, Any] = {"nogil": True, "error_model": "numpy"}
+
+# What the reference has been asked to do in this process, in estimated seconds (a cache of
+# the decision, like the imported module: it only ever moves a process towards Numba).
+_SPENT = [0.0]
+
+
+def policy() -> str:
+    """``"auto"``, ``"always"`` or ``"never"``, from the environment (read at every call)."""
+    if os.environ.get(DISABLE_ENV, "") not in ("", "0"):
+        return "never"
+    value = os.environ.get(POLICY_ENV, "auto").strip().lower()
+    if value in ("1", "always", "on", "yes"):
+        return "always"
+    if value in ("0", "never", "off", "no"):
+        return "never"
+    return "auto"
 
 
 @functools.cache
 def _numba() -> Any:
-    """The numba module, or None when it is missing or disabled (imported once, lazily)."""
-    if os.environ.get(DISABLE_ENV, "") not in ("", "0"):
-        return None
+    """The numba module, or None when it is missing (imported once, lazily)."""
     try:
         return importlib.import_module("numba")
     except ImportError:  # pragma: no cover - depends on the installation
         return None
 
 
+@functools.cache
+def _installed() -> bool:
+    return importlib.util.find_spec("numba") is not None
+
+
 def available() -> bool:
-    """Whether the compiled kernel can be used (Numba importable, not disabled)."""
-    return _numba() is not None
+    """Whether the compiled kernel can be used (Numba installed, not disabled); no import."""
+    return policy() != "never" and _installed()
+
+
+def loaded() -> bool:
+    """Whether Numba has been loaded for the kernel in this process (and is not disabled)."""
+    return policy() != "never" and _numba.cache_info().currsize > 0 and _numba() is not None
+
+
+def reference_seconds(pairs: int, work: int) -> float:
+    """Estimated CPU seconds of the NumPy reference for ``pairs`` pairs and ``work`` units.
+
+    ``work`` is the sum over pairs of both objects' edge counts times the directions. Fitted
+    on ``benchmarks/bench_forces.py``'s cases (idle core): 0.25 ms per pair of fixed cost and
+    0.06-0.27 µs per unit (convex 30 + 30: 0.64 ms; stars 200 + 200: 19 ms; 512² masks: 13 ms).
+    """
+    return 2.5e-4 * pairs + 1.0e-7 * work
+
+
+def wanted(pairs: int, work: int) -> bool:
+    """Whether this sweep should run compiled (loading Numba now if it pays; see above)."""
+    mode = policy()
+    if mode == "never" or not _installed():
+        return False
+    if mode == "always" or loaded():
+        return _numba() is not None
+    _SPENT[0] += reference_seconds(pairs, work)
+    if _SPENT[0] >= LOAD_SECONDS:
+        return _numba() is not None
+    return False
 
 
 def _fallback_cache_dir() -> str:
@@ -57,7 +119,7 @@ def _fallback_cache_dir() -> str:
 
 def jit(fn: F) -> F:
     """Compile ``fn`` with Numba (lazily, cached on disk); identity without Numba."""
-    numba = _numba()
+    numba = _numba() if available() else None
     if numba is None:
         return fn
     try:

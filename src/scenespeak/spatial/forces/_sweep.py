@@ -30,6 +30,7 @@ from typing import TypeVar
 
 import numpy as np
 
+from scenespeak.spatial.forces import _trace
 from scenespeak.spatial.forces._jit import jit
 
 F = TypeVar("F", bound=Callable[..., object])
@@ -120,6 +121,7 @@ def _tables(
     tab: np.ndarray,
     extent: np.ndarray,
     srt: np.ndarray,
+    keys: np.ndarray,
 ) -> None:
     """Every region's edge table for direction (c, s), each sorted by the edge's ``v_lo``.
 
@@ -166,19 +168,21 @@ def _tables(
                 perm[lo_g + j] = lo_g + order[j]
         else:
             # The keys in the previous order, contiguous, so that the shifts read and write
-            # neighbouring memory (srt's first column is free until the gather below).
+            # neighbouring memory.
             for j in range(lo_g, hi_g):
-                srt[j, 0] = tab[perm[j], 0]
+                keys[j] = tab[perm[j], 0]
             for j in range(lo_g + 1, hi_g):
+                kv = keys[j]
+                if keys[j - 1] <= kv:
+                    continue
                 key = perm[j]
-                kv = srt[j, 0]
                 i = j - 1
-                while i >= lo_g and srt[i, 0] > kv:
+                while i >= lo_g and keys[i] > kv:
                     perm[i + 1] = perm[i]
-                    srt[i + 1, 0] = srt[i, 0]
+                    keys[i + 1] = keys[i]
                     i -= 1
                 perm[i + 1] = key
-                srt[i + 1, 0] = kv
+                keys[i + 1] = kv
         # The rows in that order, contiguous: the walks read them one after the other.
         for j in range(lo_g, hi_g):
             e = perm[j]
@@ -445,6 +449,7 @@ def sweep(
     perm = np.empty(pts.shape[0], dtype=np.int64)
     extent = np.empty((region_start.size - 1, 2))
     srt = np.empty((pts.shape[0], 5))
+    keys = np.empty(pts.shape[0])
     buf = np.empty((1024, 2), dtype=np.int64)
     acc = np.empty((2, n_k))
     # F0 + F2 (what every caller of f0_f2_pairs and force_histograms() asks for): fused walk.
@@ -453,7 +458,7 @@ def sweep(
         theta = 2.0 * math.pi * d / directions
         c = math.cos(theta)
         s = math.sin(theta)
-        _tables(c, s, pts, nxt, region_start, perm, d == 0, tab, extent, srt)
+        _tables(c, s, pts, nxt, region_start, perm, d == 0, tab, extent, srt, keys)
         for p in range(n_pairs):
             ga = pair_a[p]
             gb = pair_b[p]
@@ -550,3 +555,8 @@ def first_contact(p: np.ndarray, q: np.ndarray, tol: float) -> np.ndarray:
                 best[0] = i
                 best[1] = j
     return best
+
+
+#: Mask tracing (:mod:`~scenespeak.spatial.forces._trace`), compiled with the kernel.
+trace_links = jit(_trace.links_loop)
+trace_rings = jit(_trace.follow_rings)

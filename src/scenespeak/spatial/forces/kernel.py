@@ -54,7 +54,10 @@ class KernelSpec:
 
 
 def compiled() -> bool:
-    """Whether the compiled kernel is used (Numba importable and not disabled).
+    """Whether the compiled kernel can be used (Numba installed and not disabled).
+
+    It is used for a sweep once the process's work pays for loading it
+    (:mod:`~scenespeak.spatial.forces._jit`; ``SCENESPEAK_NUMBA=always`` from the first).
 
     Examples
     --------
@@ -123,7 +126,9 @@ def sweep_pairs(
     y0_arr = np.zeros(len(pairs)) if y0 is None else np.asarray(y0, dtype=np.float64)
     if not pairs:
         return np.zeros((0, len(kernels), directions))
-    if not _jit.available():
+    sizes = [len(r.start) for r in regions]
+    work = directions * sum(sizes[i] + sizes[j] for i, j in pairs)
+    if not _jit.wanted(len(pairs), work):
         return _reference(regions, pairs, kernels, list(y0_arr), directions)
     from scenespeak.spatial.forces._sweep import sweep
 

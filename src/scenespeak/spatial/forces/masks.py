@@ -2,7 +2,9 @@
 
 Pixel ``(row, col)`` has its centre at ``(x, y) = (col, -row)``. The outline is the
 marching-squares iso-line at level 0.5 (half-way between inside and outside pixel centres, which
-is where the outline of a polygon rasterised by pixel centres lies), holes included, then
+is where the outline of a polygon rasterised by pixel centres lies; traced by
+:mod:`~scenespeak.spatial.forces._trace`, the same rings as ``skimage.measure.find_contours``
+with ``fully_connected="high"``), holes included, then
 simplified by Douglas-Peucker to within a tolerance (pixels) so that the force sweep does not
 pay for every step of a staircase.
 """
@@ -36,7 +38,8 @@ def _mask_region(mask: NDArray[np.bool_], name: str, tolerance: float | None) ->
     pixels (``None``: :func:`outline_tolerance`).
     """
     import cv2
-    from skimage.measure import find_contours
+
+    from scenespeak.spatial.forces._trace import rings
 
     if mask.ndim != 2:
         raise InputError(name, f"a mask must be a 2-D boolean array, got shape {mask.shape}")
@@ -48,8 +51,8 @@ def _mask_region(mask: NDArray[np.bool_], name: str, tolerance: float | None) ->
     if tolerance is None:
         tolerance = outline_tolerance(max(mask.shape))
     # Trace only the bounding box (padded by one pixel so that every outline closes).
-    padded = np.pad(mask[r0 : int(rows[-1]) + 1, c0 : int(cols[-1]) + 1], 1).astype(np.float64)
-    contours = find_contours(padded, 0.5, fully_connected="high", positive_orientation="high")
+    padded = np.pad(mask[r0 : int(rows[-1]) + 1, c0 : int(cols[-1]) + 1], 1)
+    contours = rings(padded)
     starts: list[FloatArray] = []
     ends: list[FloatArray] = []
     nxts: list[NDArray[np.intp]] = []
@@ -57,8 +60,6 @@ def _mask_region(mask: NDArray[np.bool_], name: str, tolerance: float | None) ->
     total = 0
     area = 0.0
     for c in contours:
-        if len(c) > 1 and np.array_equal(c[0], c[-1]):
-            c = c[:-1]
         if tolerance > 0 and len(c) > 4:
             # Marching-squares vertices sit on the half-pixel grid: exact in float32.
             kept = cv2.approxPolyDP(c.astype(np.float32)[:, None, :], tolerance, True)

@@ -141,13 +141,14 @@ def _check_simple(p: FloatArray, q: FloatArray, scale: float, name: str) -> None
 def _first_contact(p: FloatArray, q: FloatArray, tol: float) -> tuple[int, int] | None:
     """The first pair of non-adjacent edges that cross or come within ``tol`` (or None).
 
-    Compiled (:func:`~scenespeak.spatial.forces._sweep.first_contact`) where Numba is; else
-    every pair of edges whose bounding boxes come within ``tol``, in NumPy.
+    Compiled (:func:`~scenespeak.spatial.forces._sweep.first_contact`) once the compiled
+    kernel is loaded; else every pair of edges whose bounding boxes come within ``tol``, in
+    NumPy (the same answer).
     """
     from scenespeak.spatial.forces import _jit
 
     n = len(p)
-    if _jit.available():
+    if _jit.loaded():
         from scenespeak.spatial.forces._sweep import first_contact
 
         i, j = (int(x) for x in first_contact(p, q, tol))
