@@ -110,80 +110,89 @@ def _mean_phi(code: int, r: float, y0: float, a0: float, a1: float) -> float:
 
 
 @jit
+def _project(
+    c: float, s: float, pts: np.ndarray, nxt: np.ndarray, lo_g: int, hi_g: int, tab: np.ndarray
+) -> tuple[float, float]:
+    """Rows ``lo_g:hi_g`` of the edge table for direction (c, s); returns the ``v`` range.
+
+    ``tab[e]`` is ``[v_lo, v_hi, s(v_lo), ds/dv, sign(dv)]`` of edge ``e`` in its region's
+    frame (``pts`` are relative to the region's origin).
+    """
+    vmin = math.inf
+    vmax = -math.inf
+    for e in range(lo_g, hi_g):
+        f = nxt[e]
+        s0 = pts[e, 0] * c + pts[e, 1] * s
+        v0 = pts[e, 1] * c - pts[e, 0] * s
+        s1 = pts[f, 0] * c + pts[f, 1] * s
+        v1 = pts[f, 1] * c - pts[f, 0] * s
+        dv = v1 - v0
+        if dv < 0.0:
+            tab[e, 0] = v1
+            tab[e, 1] = v0
+            tab[e, 2] = s1
+            tab[e, 4] = -1.0
+        else:
+            tab[e, 0] = v0
+            tab[e, 1] = v1
+            tab[e, 2] = s0
+            tab[e, 4] = 1.0 if dv > 0.0 else 0.0
+        tab[e, 3] = (s1 - s0) / dv if dv != 0.0 else 0.0
+        vmin = min(vmin, v0)
+        vmax = max(vmax, v0)
+    return vmin, vmax
+
+
+@jit
+def _order(
+    tab: np.ndarray, perm: np.ndarray, keys: np.ndarray, lo_g: int, hi_g: int, first: bool
+) -> None:
+    """Keep ``perm[lo_g:hi_g]`` sorted by ``v_lo``: a full sort the first time, then insertion
+    sort from the previous direction's order (few inversions between neighbours), on the
+    keys copied contiguous so that the shifts read and write neighbouring memory."""
+    if first:
+        order = np.argsort(tab[lo_g:hi_g, 0])
+        for j in range(hi_g - lo_g):
+            perm[lo_g + j] = lo_g + order[j]
+        return
+    for j in range(lo_g, hi_g):
+        keys[j] = tab[perm[j], 0]
+    for j in range(lo_g + 1, hi_g):
+        kv = keys[j]
+        if keys[j - 1] <= kv:
+            continue
+        key = perm[j]
+        i = j - 1
+        while i >= lo_g and keys[i] > kv:
+            perm[i + 1] = perm[i]
+            keys[i + 1] = keys[i]
+            i -= 1
+        perm[i + 1] = key
+        keys[i + 1] = kv
+
+
+@jit
 def _tables(
     c: float,
     s: float,
     pts: np.ndarray,
     nxt: np.ndarray,
     region_start: np.ndarray,
-    perm: np.ndarray,
     first: bool,
-    tab: np.ndarray,
-    extent: np.ndarray,
-    srt: np.ndarray,
-    keys: np.ndarray,
+    scratch: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray],
 ) -> None:
     """Every region's edge table for direction (c, s), each sorted by the edge's ``v_lo``.
 
-    ``tab[e]`` is ``[v_lo, v_hi, s(v_lo), ds/dv, sign(dv)]`` of edge ``e``; ``perm`` lists
-    each region's edges by ``v_lo`` in its own
-    region's frame (``pts`` are relative to the region's origin); ``extent[g]`` is region g's
-    range of ``v``; ``srt[j]`` is ``tab[perm[j]]`` (the rows in sorted order).
+    ``scratch`` is ``(tab, perm, extent, srt, keys)``: ``tab`` the rows of :func:`_project`,
+    ``perm`` each region's edges by ``v_lo``, ``extent[g]`` region g's range of ``v``,
+    ``srt[j] = tab[perm[j]]`` (the rows in sorted order, contiguous), ``keys`` scratch.
     """
-    n_regions = region_start.size - 1
-    for g in range(n_regions):
+    tab, perm, extent, srt, keys = scratch
+    for g in range(region_start.size - 1):
         lo_g = region_start[g]
         hi_g = region_start[g + 1]
-        vmin = math.inf
-        vmax = -math.inf
-        for e in range(lo_g, hi_g):
-            f = nxt[e]
-            s0 = pts[e, 0] * c + pts[e, 1] * s
-            v0 = pts[e, 1] * c - pts[e, 0] * s
-            s1 = pts[f, 0] * c + pts[f, 1] * s
-            v1 = pts[f, 1] * c - pts[f, 0] * s
-            dv = v1 - v0
-            if dv < 0.0:
-                tab[e, 0] = v1
-                tab[e, 1] = v0
-                tab[e, 2] = s1
-                tab[e, 4] = -1.0
-            else:
-                tab[e, 0] = v0
-                tab[e, 1] = v1
-                tab[e, 2] = s0
-                tab[e, 4] = 1.0 if dv > 0.0 else 0.0
-            tab[e, 3] = (s1 - s0) / dv if dv != 0.0 else 0.0
-            if v0 < vmin:
-                vmin = v0
-            if v0 > vmax:
-                vmax = v0
-        extent[g, 0] = vmin
-        extent[g, 1] = vmax
-        # Keep perm[lo_g:hi_g] sorted by v_lo: a full sort the first time, then insertion
-        # sort from the previous direction's order (few inversions between neighbours).
-        if first:
-            order = np.argsort(tab[lo_g:hi_g, 0])
-            for j in range(hi_g - lo_g):
-                perm[lo_g + j] = lo_g + order[j]
-        else:
-            # The keys in the previous order, contiguous, so that the shifts read and write
-            # neighbouring memory.
-            for j in range(lo_g, hi_g):
-                keys[j] = tab[perm[j], 0]
-            for j in range(lo_g + 1, hi_g):
-                kv = keys[j]
-                if keys[j - 1] <= kv:
-                    continue
-                key = perm[j]
-                i = j - 1
-                while i >= lo_g and keys[i] > kv:
-                    perm[i + 1] = perm[i]
-                    keys[i + 1] = keys[i]
-                    i -= 1
-                perm[i + 1] = key
-                keys[i + 1] = kv
-        # The rows in that order, contiguous: the walks read them one after the other.
+        extent[g, 0], extent[g, 1] = _project(c, s, pts, nxt, lo_g, hi_g, tab)
+        _order(tab, perm, keys, lo_g, hi_g, first)
         for j in range(lo_g, hi_g):
             e = perm[j]
             for q in range(5):
@@ -458,7 +467,7 @@ def sweep(
         theta = 2.0 * math.pi * d / directions
         c = math.cos(theta)
         s = math.sin(theta)
-        _tables(c, s, pts, nxt, region_start, perm, d == 0, tab, extent, srt, keys)
+        _tables(c, s, pts, nxt, region_start, d == 0, (tab, perm, extent, srt, keys))
         for p in range(n_pairs):
             ga = pair_a[p]
             gb = pair_b[p]
