@@ -34,7 +34,6 @@ KNOWN: dict[tuple[str, str, str], int] = {
     # owned by the spatial-speed issue (16): the forces package
     ("complexity", "spatial/forces/regions.py", "_polygon_region"): 17,
     ("parameters", "spatial/forces/_sweep.py", "sweep"): 10,
-    ("parameters", "spatial/forces/_sweep.py", "_tables"): 9,
     # not split yet (see the note of issue 9)
     ("lines", "perception/stereo.py", ""): 1063,
     ("lines", "perception/calibration.py", ""): 900,
