@@ -46,7 +46,9 @@ def _make(out: Path) -> None:
 def live_data(tmp_path_factory: pytest.TempPathFactory) -> LiveData:
     """The sequence and database (see the module docstring)."""
     pytest.importorskip("pybullet")
-    shared = tmp_path_factory.getbasetemp().parent / "live-data"
+    # the folder outlives the run: its name changes with what the generator writes (v2: the
+    # RGB-D files of every frame), so an older cache is not taken for this one
+    shared = tmp_path_factory.getbasetemp().parent / "live-data-v2"
     if not (shared / "done").exists():
         tmp = Path(tempfile.mkdtemp(prefix=".live-data-", dir=shared.parent))
         _make(tmp)

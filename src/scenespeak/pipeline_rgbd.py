@@ -71,6 +71,9 @@ __all__ = [
     "describe_image_plane",
     "describe_rgbd",
     "describe_stereo_masks",
+    "measure_masks",
+    "name_objects",
+    "resolve_up",
 ]
 
 MasksIn = InstanceMasks | NDArray[np.integer[Any]]
@@ -258,7 +261,7 @@ def _summary(rels: Sequence[PairRelation], objects: Sequence[MeasuredObject]) ->
     )
 
 
-def _named(
+def name_objects(
     measured: Sequence[MeasuredObject | Skipped],
 ) -> tuple[list[MeasuredObject], list[Skipped]]:
     """Split described and skipped objects; name the instances apart (spatial/naming)."""
@@ -284,7 +287,7 @@ def _finish(
     summary: bool,
 ) -> RGBDDescription:
     t0 = time.perf_counter()
-    objects, skipped = _named(measured)
+    objects, skipped = name_objects(measured)
     rels = _relate(objects, directions, frame)
     text = _summary(rels, objects) if summary else ""
     timings["relations"] = time.perf_counter() - t0
@@ -431,13 +434,7 @@ def describe_rgbd(
     vec, plane = resolved[0], resolved[3]
     measured: list[MeasuredObject | Skipped] = []
     if inst is not None:
-        for k, label in enumerate(inst.labels):
-            ys, xs = _mask_pixels(inst, k)
-            measured.append(
-                measure_object(
-                    label, label, ys, xs, d, intrinsics, vec, surface="connected", options=o
-                )
-            )
+        measured.extend(measure_masks(d, intrinsics, inst, vec, o))
     elif boxes is not None:
         measured.extend(_box_objects(boxes, d, intrinsics, vec, plane, o))
     elif db is not None:
@@ -448,6 +445,42 @@ def describe_rgbd(
         raise InputError(None, "give masks, boxes or an object database with the depth image")
     timings["objects"] = time.perf_counter() - t0
     return _finish("horizontal", measured, resolved, timings, src, directions, summary)
+
+
+def measure_masks(
+    depth: NDArray[np.floating],
+    cam: Intrinsics,
+    inst: InstanceMasks,
+    up: NDArray[np.float64],
+    options: RGBDOptions | None = None,
+) -> list[MeasuredObject | Skipped]:
+    """Each instance's object: its mask's largest depth mode and the pixels continuous with it.
+
+    The objects of :func:`describe_rgbd` with masks, before naming and relations (a stream
+    relates them in its working memory). ``depth`` in metres (NaN = none), ``up`` a unit
+    vector in the camera frame.
+    """
+    o = options or RGBDOptions()
+    out: list[MeasuredObject | Skipped] = []
+    for k, label in enumerate(inst.labels):
+        ys, xs = _mask_pixels(inst, k)
+        out.append(
+            measure_object(label, label, ys, xs, depth, cam, up, surface="connected", options=o)
+        )
+    return out
+
+
+def resolve_up(
+    depth: NDArray[np.floating],
+    cam: Intrinsics,
+    exclude: NDArray[np.bool_] | None = None,
+    options: RGBDOptions | None = None,
+) -> tuple[NDArray[np.float64], str, str]:
+    """Up (unit, camera frame), its source (``"given"``, ``"estimated"``, ``"default"``) and
+    the note, as :func:`describe_rgbd` finds it: the intrinsics' ``up``, else the support plane
+    of the depth outside ``exclude`` (the objects), else ``[0, -1, 0]`` with the reason."""
+    vec, source, note, _ = _resolve_up(depth, cam, None, exclude, False, options or RGBDOptions())
+    return vec, source, note
 
 
 def _box_objects(

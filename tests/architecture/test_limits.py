@@ -87,7 +87,8 @@ KNOWN: dict[tuple[str, str, str], int] = {
     ("parameters", "cli/annotate.py", "annotate_cmd"): 10,
     ("parameters", "cli/points.py", "points_cmd"): 13,
     ("parameters", "cli/watch.py", "_source"): 9,
-    ("parameters", "cli/watch.py", "watch_cmd"): 18,
+    # a typer command: one parameter per CLI option (issue 14: the RGB-D sources added 8)
+    ("parameters", "cli/watch.py", "watch_cmd"): 26,
     ("parameters", "perception/rgbd.py", "measure_object"): 11,
     ("parameters", "pipeline_rgbd.py", "describe_rgbd"): 12,
     ("parameters", "pipeline_rgbd.py", "describe_stereo_masks"): 10,

@@ -31,6 +31,10 @@ def serve_cmd(
     max_side: Annotated[
         int, typer.Option("--max-side", min=16, help="Largest image width or height, pixels.")
     ] = 4096,
+    intrinsics: Annotated[
+        Path | None,
+        typer.Option("--intrinsics", help="Colour camera used when an RGB-D request sends none."),
+    ] = None,
 ) -> None:
     """Serve describe and ask over HTTP, with the viewer page at /."""
     from scenespeak.live.service import ServiceLimits, serve
@@ -40,4 +44,6 @@ def serve_cmd(
     limits = ServiceLimits(
         max_body=int(max_mb * 1024 * 1024), max_side=max_side, max_pixels=max_side * max_side
     )
-    serve(db, calib=calib, host=host, port=port, workers=workers, limits=limits)
+    serve(
+        db, calib=calib, host=host, port=port, workers=workers, limits=limits, intrinsics=intrinsics
+    )

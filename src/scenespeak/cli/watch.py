@@ -11,7 +11,7 @@ from typing import Annotated, Any
 
 import typer
 
-from scenespeak.cli._app import CalibRightOpt, DbOpt, QuietOpt, app
+from scenespeak.cli._app import CalibRightOpt, QuietOpt, app
 from scenespeak.errors import InputError, ScenespeakError
 
 
@@ -88,7 +88,10 @@ def _warn(where: str, problem: str) -> None:
 
 @app.command("watch")
 def watch_cmd(
-    db: DbOpt,
+    db: Annotated[
+        Path | None,
+        typer.Option("--db", help="The object database (stereo; RGB-D frames without masks)."),
+    ] = None,
     calib: Annotated[
         Path | None, typer.Option("--calib", help="Calibration (as for describe).")
     ] = None,
@@ -131,9 +134,37 @@ def watch_cmd(
     unknown: Annotated[
         bool, typer.Option("--unknown/--no-unknown", help="Also keep unknown point clusters.")
     ] = False,
+    rgbd: Annotated[
+        Path | None,
+        typer.Option("--rgbd", help="Folder of RGB-D frames: NNNN/{color,depth,masks}.png."),
+    ] = None,
+    color_topic: Annotated[str | None, typer.Option(help="Colour Image topic (RGB-D bag).")] = None,
+    depth_topic: Annotated[str | None, typer.Option(help="Depth Image topic (RGB-D bag).")] = None,
+    masks_topic: Annotated[str | None, typer.Option(help="Instance-mask Image topic.")] = None,
+    info_topic: Annotated[str | None, typer.Option(help="Colour CameraInfo topic.")] = None,
+    intrinsics: Annotated[
+        Path | None, typer.Option("--intrinsics", help="Colour camera of RGB-D frames.")
+    ] = None,
+    labels: Annotated[
+        Path | None, typer.Option("--labels", help="Labels JSON of the RGB-D masks.")
+    ] = None,
+    depth_scale: Annotated[
+        float, typer.Option("--depth-scale", min=1e-9, help="Metres per depth unit.")
+    ] = 0.001,
     quiet: QuietOpt = False,
 ) -> None:
-    """Describe a stereo stream frame by frame with a working memory (JSON Lines)."""
+    """Describe a stereo or RGB-D stream frame by frame with a working memory (JSON Lines)."""
+    from scenespeak.cli._watch_rgbd import RGBDWatch, watch_rgbd
+
+    w = RGBDWatch(
+        rgbd, rosbag, color_topic, depth_topic, masks_topic, info_topic, intrinsics, labels,
+        depth_scale, fps, max_frames,
+    )  # fmt: skip
+    if w.wanted:
+        watch_rgbd(w, db)
+        return
+    if db is None:
+        raise InputError("--db", "a stereo stream needs the object database")
     from scenespeak.live.stream import SceneStream, StreamOptions
     from scenespeak.perception.database import ObjectDatabase
     from scenespeak.perception.tracking import TrackingOptions

@@ -154,6 +154,10 @@ class _Workers:
     """A thread pool whose threads each hold an open, indexed database."""
 
     def __init__(self, db_path: Path, workers: int) -> None:
+        # imported here, once: two worker threads importing the database package at the same
+        # time could see it half-initialised (its compatibility alias swaps sys.modules)
+        import scenespeak.perception.recognition  # noqa: F401
+
         self.db_path = db_path
         self.local = threading.local()
         self.pool = ThreadPoolExecutor(
@@ -164,7 +168,7 @@ class _Workers:
             f.result()
 
     def _open(self) -> None:
-        from scenespeak.perception.database import ObjectDatabase
+        from scenespeak.perception.recognition import ObjectDatabase
 
         try:
             db = ObjectDatabase.open(self.db_path, readonly=True)
@@ -286,8 +290,11 @@ def create_app(  # noqa: C901 (complexity 41 > 15: to be split into route module
     calib: str | Path | None = None,
     workers: int = 2,
     limits: ServiceLimits | None = None,
+    intrinsics: str | Path | None = None,
 ) -> Any:
     """The FastAPI application (the database is opened by every worker thread now).
+
+    ``intrinsics`` is used by RGB-D requests (``color`` + ``depth``) that send none.
 
     Raises
     ------
@@ -307,6 +314,11 @@ def create_app(  # noqa: C901 (complexity 41 > 15: to be split into route module
         from scenespeak.perception.calibration import load_rig
 
         load_rig(default_calib)  # fail at start-up, not per request
+    default_intrinsics = Path(intrinsics) if intrinsics is not None else None
+    if default_intrinsics is not None:
+        from scenespeak.perception.intrinsics import load_intrinsics
+
+        load_intrinsics(default_intrinsics)  # fail at start-up, not per request
     pool = _Workers(Path(db_path), max(1, int(workers)))
 
     @asynccontextmanager
@@ -375,9 +387,17 @@ def create_app(  # noqa: C901 (complexity 41 > 15: to be split into route module
     async def describe_from(request: Request) -> tuple[Any, dict[str, Any], dict[str, str]]:
         files, fields = await read_form(request)
         if "color" in files or "depth" in files:
-            raise RequestProblem(
-                400, "color + depth input is not available in this version (send left and right)"
+            from scenespeak.live.service_rgbd import rgbd_job
+
+            fmt = fields.get("format", "json")
+            if fmt not in ("json", "text"):
+                raise RequestProblem(400, f"format must be json or text, not {fmt[:20]!r}")
+
+            loop = asyncio.get_running_loop()
+            description, result = await loop.run_in_executor(
+                pool.pool, rgbd_job, files, fields, pool.db_path, default_intrinsics, lim
             )
+            return description, result, fields
         for need in ("left", "right"):
             if need not in files:
                 raise RequestProblem(400, f"missing the file field `{need}` (send left and right)")
@@ -471,9 +491,10 @@ def serve(
     port: int = 8765,
     workers: int = 2,
     limits: ServiceLimits | None = None,
+    intrinsics: str | Path | None = None,
 ) -> None:  # pragma: no cover - runs until stopped
     """Run the service with uvicorn until interrupted."""
     import uvicorn
 
-    app = create_app(db_path, calib=calib, workers=workers, limits=limits)
+    app = create_app(db_path, calib=calib, workers=workers, limits=limits, intrinsics=intrinsics)
     uvicorn.run(app, host=host, port=port, log_level="warning")

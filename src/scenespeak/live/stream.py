@@ -19,7 +19,26 @@ from scenespeak.contract import SpatialObject
 from scenespeak.perception.tracking import FrameObjects, ObjectTracker, TrackingOptions
 from scenespeak.spatial.memory import MemoryFrame, MemoryOptions, Sighting, WorkingMemory
 
-__all__ = ["SceneStream", "StreamFrame", "StreamOptions"]
+__all__ = ["SceneStream", "StreamFrame", "StreamOptions", "relations_json"]
+
+
+def relations_json(memory: MemoryFrame) -> list[dict[str, Any]]:
+    """The ``relations`` of a ``watch`` JSON line: the memory's steady words, with ids."""
+    return [
+        {
+            "argument": rel.argument,
+            "referent": rel.referent,
+            "argument_id": a,
+            "referent_id": b,
+            "primary": rel.primary,
+            "secondary": rel.secondary,
+            "hedge": rel.hedge,
+            "vertical": rel.vertical,
+            "sentence": rel.sentence,
+            "degrees": {k: round(float(v), 4) for k, v in rel.degrees.items()},
+        }
+        for rel, (a, b) in zip(memory.relations, memory.relation_ids, strict=True)
+    ]
 
 
 @dataclass(frozen=True)
@@ -63,29 +82,13 @@ class StreamFrame:
             if m.sentence:
                 obj["sentence"] = m.sentence
             objects.append(obj)
-        relations = []
-        for rel, (a, b) in zip(self.memory.relations, self.memory.relation_ids, strict=True):
-            relations.append(
-                {
-                    "argument": rel.argument,
-                    "referent": rel.referent,
-                    "argument_id": a,
-                    "referent_id": b,
-                    "primary": rel.primary,
-                    "secondary": rel.secondary,
-                    "hedge": rel.hedge,
-                    "vertical": rel.vertical,
-                    "sentence": rel.sentence,
-                    "degrees": {k: round(float(v), 4) for k, v in rel.degrees.items()},
-                }
-            )
         timings = {k: round(v * 1000.0, 2) for k, v in self.tracked.timings.items()}
         timings["total"] = round(self.seconds * 1000.0, 2)
         return {
             "frame": self.index,
             "time_s": round(self.time_s, 6),
             "objects": objects,
-            "relations": relations,
+            "relations": relations_json(self.memory),
             "events": list(self.memory.events),
             "event_records": [dict(r) for r in self.memory.records],
             "recognised": self.tracked.recognised,

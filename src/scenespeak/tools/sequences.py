@@ -11,7 +11,11 @@ Layout (``interfaces.md``, "Streams"; ``docs/live.md``)::
 
     SEQ/calib.json            the rig (short form: a level, rectified rig)
     SEQ/truth.json            {"script", "seed", "frames": [...], "events": [...]}
+    SEQ/intrinsics.json       the left camera (RGB-D form, with up)
     SEQ/0000/left.png, SEQ/0000/right.png, ...
+    SEQ/0000/depth.png        the left camera's depth, 16-bit millimetres (0 = none)
+    SEQ/0000/masks.png        its instance image (k = the k-th object of "labels")
+    SEQ/0000/labels.json      the instances present in this frame: {"k": label}
 
 ``truth.json["frames"][k]["objects"]`` gives, per object present, its truth ``id`` (stable over
 the sequence), ``label``, ``centroid`` (left camera frame, metres), ``footprint`` (horizontal
@@ -53,8 +57,10 @@ from numpy.typing import NDArray
 from scenespeak.errors import InputError
 from scenespeak.perception.calibration import ground_basis
 from scenespeak.tools.render import (
+    FAR,
     FLOOR_RGBA,
     LIGHT_DIRECTION,
+    NEAR,
     Camera,
     texture_image,
     write_box_obj,
@@ -300,8 +306,9 @@ class _Renderer:
 
     def frame(
         self, shot: _Shot, cams: Sequence[Camera]
-    ) -> list[tuple[NDArray[np.uint8], NDArray[np.int32]]]:
-        """Images and segmentations (-1 = floor, k = object k) of ``shot`` from ``cams``."""
+    ) -> list[tuple[NDArray[np.uint8], NDArray[np.int32], NDArray[np.float32]]]:
+        """Images, segmentations (-1 = floor, k = object k) and camera-frame depths (metres,
+        render resolution, NaN where nothing was hit) of ``shot`` from ``cams``."""
         p = self.p
         for body, pl in zip(self.bodies, shot.placements, strict=True):
             pos = [0.0, 0.0, -5.0] if pl is None else list(pl.position)
@@ -323,7 +330,10 @@ class _Renderer:
             seg = np.full(raw.shape, -1, np.int32)
             for k, body in enumerate(self.bodies):
                 seg[raw == body] = k
-            out.append((np.round(rgb).astype(np.uint8), seg))
+            buf = np.reshape(np.asarray(res[3], np.float64), (h * s, w * s))
+            z = FAR * NEAR / (FAR - (FAR - NEAR) * buf)
+            z[buf >= 1.0 - 1e-7] = np.nan
+            out.append((np.round(rgb).astype(np.uint8), seg, z.astype(np.float32)))
         return out
 
 
@@ -466,6 +476,33 @@ def _write_rgb(path: Path, rgb: NDArray[np.uint8]) -> None:
         raise InputError(path, "cannot be written")
 
 
+def _write_rgbd(
+    d: Path, seg: NDArray[np.int32], z: NDArray[np.float32], labels: Sequence[str]
+) -> None:
+    """The left camera's depth (16-bit mm), instance image and its labels for one frame."""
+    from scenespeak.tools.render import downsample_depth, downsample_labels
+    from scenespeak.tools.scenes import _depth_mm
+
+    depth = downsample_depth(seg, z, SUPERSAMPLE)
+    if not cv2.imwrite(str(d / "depth.png"), _depth_mm(depth)):
+        raise InputError(d / "depth.png", "cannot be written")
+    inst = downsample_labels(seg, SUPERSAMPLE, len(labels))
+    if not cv2.imwrite(str(d / "masks.png"), inst):
+        raise InputError(d / "masks.png", "cannot be written")
+    present = sorted(int(k) for k in np.unique(inst) if k > 0)
+    names = {str(k): labels[k - 1] for k in present}
+    (d / "labels.json").write_text(json.dumps(names) + "\n")
+
+
+def _intrinsics(rig: Rig) -> dict[str, Any]:
+    k = rig.camera("left").intrinsics(SUPERSAMPLE)
+    w, h = rig.image_size
+    return {
+        "fx": float(k[0, 0]), "fy": float(k[1, 1]), "cx": float(k[0, 2]), "cy": float(k[1, 2]),
+        "width": int(w), "height": int(h), "up": [round(float(c), 12) + 0.0 for c in rig.up],
+    }  # fmt: skip
+
+
 def generate_sequence(
     out_dir: str | PathLike[str],
     script: str,
@@ -526,6 +563,7 @@ def generate_sequence(
             "events": events,
         }
         (tmp / "calib.json").write_text(json.dumps(rig.calibration(), indent=1) + "\n")
+        (tmp / "intrinsics.json").write_text(json.dumps(_intrinsics(rig), indent=1) + "\n")
         (tmp / "truth.json").write_text(json.dumps(data, indent=1) + "\n")
         tmp.chmod(0o755)
         if out.exists():
@@ -551,11 +589,12 @@ def _render_all(
         try:
             for k, shot in enumerate(shots):
                 cams = _cameras(rig, shot.pan_deg)
-                (img_l, seg_l), (img_r, _) = renderer.frame(shot, cams)
+                (img_l, seg_l, z_l), (img_r, _, _) = renderer.frame(shot, cams)
                 d = tmp / f"{k:04d}"
                 d.mkdir()
                 _write_rgb(d / "left.png", img_l)
                 _write_rgb(d / "right.png", img_r)
+                _write_rgbd(d, seg_l, z_l, labels)
                 frames.append(_frame_truth(k, shot, cams[0], seg_l, labels))
                 if progress is not None:
                     progress(k + 1, len(shots))
