@@ -251,8 +251,12 @@ class RGBDStream:
         if m.shape != d.shape:
             mh, mw = (*m.shape, 0, 0)[:2]
             raise ImageError("masks", f"are {mw}x{mh} but the depth image is {size[0]}x{size[1]}")
-        present = set(np.unique(m).tolist()) - {0}
-        vec, up_source, _ = resolve_up(d, self.cam, m > 0, o)
+        if m.dtype.kind not in "iu" or (m.dtype.kind == "i" and m.size and int(m.min()) < 0):
+            raise ImageError("masks", "must hold instance numbers 0 (background) or more")
+        counts = np.bincount(m.ravel().astype(np.intp, copy=False))
+        present = set(np.flatnonzero(counts).tolist()) - {0}
+        exclude = None if self.cam.up is not None else m > 0  # the plane is sought off the objects
+        vec, up_source, _ = resolve_up(d, self.cam, exclude, o)
         t1 = time.perf_counter()
         if not present:
             return [], up_source, {"up": t1 - t0, "objects": 0.0}
