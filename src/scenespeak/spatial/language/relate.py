@@ -3,25 +3,28 @@
 from __future__ import annotations
 
 from collections.abc import Sequence
-from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from scenespeak.errors import InputError, ScenespeakError
-from scenespeak.geometry.polygons import as_polygon, intersection_area, is_convex, polygon_area
-from scenespeak.spatial.language.pairs import (
-    PairHistograms,
-    _both_ways,
-    _histograms,
-    _pair_degrees,
-    pair_histograms,
-    relation_of_pair,
+from scenespeak.errors import InputError
+from scenespeak.geometry.polygons import as_polygon
+from scenespeak.spatial.degrees import DIRECTIONS, four_direction_degrees
+from scenespeak.spatial.language.batch import (
+    HEDGES,
+    KINDS,
+    SECONDARY_HEDGES,
+    PairDecisions,
+    coverages,
+    decide_pairs,
+    sector_shares,
+    sentence_templates,
 )
+from scenespeak.spatial.language.pairs import PairHistograms, pair_histograms, relation_of_pair
 from scenespeak.spatial.language.relation import Relation
-from scenespeak.spatial.language.rules import _as_histograms
+from scenespeak.spatial.language.scenepairs import ScenePairs, scene_pairs
 from scenespeak.spatial.language.thresholds import DEFAULT_THRESHOLDS, Thresholds
-from scenespeak.spatial.language.vertical import _heights
+from scenespeak.spatial.language.vertical import _extent, _heights, _vertical_rule
 from scenespeak.spatial.language.words import _label
 
 __all__ = ["relate", "relate_objects"]
@@ -82,23 +85,17 @@ def relate_objects(
     labels = _scene_labels(hulls, names, heights)
     directions = _checked_directions(directions)
     polygons = [as_polygon(h, f"{label} hull") for h, label in zip(hulls, labels, strict=True)]
-    checked = (
+    extents = (
         None
         if heights is None
-        else [_heights(h, f"{label} heights") for h, label in zip(heights, labels, strict=True)]
+        else [
+            _extent(_heights(h, f"{label} heights"))
+            for h, label in zip(heights, labels, strict=True)
+        ]
     )
-    n = len(polygons)
-    index = [(i, j) for i in range(n) for j in range(i + 1, n)]
-    pairs = _scene_pairs(polygons, labels, index, directions)
-    found: dict[tuple[int, int], tuple[Relation, PairHistograms]] = {}
-    for (i, j), pair, (deg0, deg2) in zip(index, pairs, _pair_degrees(pairs), strict=True):
-        hi = checked[i] if checked is not None else None
-        hj = checked[j] if checked is not None else None
-        names, hs = (labels[i], labels[j]), (hi, hj)
-        ab, ba, back = _both_ways(pair, names, hs, t, (deg0, deg2), True)
-        found[i, j] = (ab, pair)
-        found[j, i] = (ba, back)
-    return [found[i, j] for i in range(n) for j in range(n) if i != j]
+    if len(polygons) < 2:
+        return []
+    return _ordered_relations(scene_pairs(polygons, labels, directions), labels, extents, t)
 
 
 def _scene_labels(
@@ -122,80 +119,172 @@ def _checked_directions(directions: object) -> int:
     return int(directions)
 
 
-def _prepared_regions(polygons: Sequence[NDArray[np.float64]], labels: Sequence[str]) -> list[Any]:
-    """Each polygon prepared once for the force sweep, or None where preparing fails (its
-    pairs then take :func:`pair_histograms`' path, and its error)."""
-    from scenespeak.spatial import forces
-
-    regions: list[Any] = []
-    for p, label in zip(polygons, labels, strict=True):
-        try:
-            regions.append(forces.prepare(p, label))
-        except ScenespeakError:
-            regions.append(None)
-    return regions
+#: Column ``k`` of the reversed pair's degrees is column ``_TURNED[k]`` of the pair's: B's
+#: degree for "left" is A's for "right" (F(B, A) is F(A, B) turned by half a turn).
+_TURNED = [DIRECTIONS.index(d) for d in ("left", "front", "right", "behind")]
 
 
-def _scene_pairs(
-    polygons: Sequence[NDArray[np.float64]],
+def _ordered_relations(
+    scene: ScenePairs,
     labels: Sequence[str],
-    index: Sequence[tuple[int, int]],
-    directions: int,
-) -> list[PairHistograms]:
-    """:class:`PairHistograms` of every pair ``(i, j)`` of ``index``: the same floats as
-    ``pair_histograms(polygons[i], polygons[j])``, with one force sweep for all pairs."""
+    extents: Sequence[tuple[float, float, float]] | None,
+    t: Thresholds,
+) -> list[tuple[Relation, PairHistograms]]:
+    """Both relations of every pair of ``scene``, in :func:`relate_objects`' order.
 
-    areas = [abs(polygon_area(p)) for p in polygons]
-    convex = [is_convex(p) for p in polygons]
-    regions = _prepared_regions(polygons, labels)
-    inter = [
-        intersection_area(polygons[i], polygons[j], a_convex=convex[i], b_convex=convex[j])
-        for i, j in index
-    ]
-    intersecting = [
-        x > 1e-12 * min(areas[i], areas[j]) for x, (i, j) in zip(inter, index, strict=True)
-    ]
-    histograms = _swept(regions, index, intersecting, directions)
-    raw: list[NDArray[np.float64]] = []
-    hybrids: list[bool] = []
-    for k, (i, j) in enumerate(index):
-        if k in histograms:
-            f0, f2, hybrid = histograms[k]
-        else:
-            f0, f2, hybrid = _histograms(polygons[i], polygons[j], directions, intersecting[k])
-        raw += [f0, f2]
-        hybrids.append(hybrid)
-    # pair_histograms' checks (_as_histogram) of every f0 and f2, in one go.
-    checked = _as_histograms(raw, ("f0", "f2"))
-    return [
-        PairHistograms(checked[2 * k], checked[2 * k + 1], hybrids[k], inter[k], areas[i], areas[j])
-        for k, (i, j) in enumerate(index)
-    ]
-
-
-def _swept(
-    regions: Sequence[Any],
-    index: Sequence[tuple[int, int]],
-    intersecting: Sequence[bool],
-    directions: int,
-) -> dict[int, tuple[NDArray[np.float64], NDArray[np.float64], bool]]:
-    """F0 and F2 (F02 where F2 is undefined) of every pair ``k`` whose two regions are
-    prepared, in one sweep: ``{k: (f0, f2, hybrid)}``."""
-    from scenespeak.spatial import forces
-
-    prepared = [
-        k for k, (i, j) in enumerate(index) if regions[i] is not None and regions[j] is not None
-    ]
-    # Regions that failed to prepare are None: only the others go to the sweep.
-    usable = [r for r in regions if r is not None]
-    slot = {id(r): g for g, r in enumerate(usable)}
-    swept = forces.f0_f2_pairs(
-        usable,
-        [(slot[id(regions[index[k][0]])], slot[id(regions[index[k][1]])]) for k in prepared],
-        directions,
-        try_f2=[not intersecting[k] for k in prepared],
+    Rows ``0..P-1`` are the pairs ``(first, second)``, rows ``P..2P-1`` the same pairs the
+    other way round; every step of the rule base runs on all rows at once
+    (:func:`~.batch.decide_pairs`), then each row becomes its :class:`Relation`.
+    """
+    p, nbins = scene.f0.shape
+    half = nbins // 2
+    f0 = np.concatenate([scene.f0, np.concatenate([scene.f0[:, -half:], scene.f0[:, :-half]], 1)])
+    f2 = np.concatenate([scene.f2, np.concatenate([scene.f2[:, -half:], scene.f2[:, :-half]], 1)])
+    # The degrees of the reversed pair are the pair's, turned (as relations_of_pair does).
+    deg0, dev0 = four_direction_degrees(scene.f0)
+    deg2, dev2 = four_direction_degrees(scene.f2)
+    deg0, dev0 = np.concatenate([deg0, deg0[:, _TURNED]]), np.concatenate([dev0, dev0[:, _TURNED]])
+    deg2, dev2 = np.concatenate([deg2, deg2[:, _TURNED]]), np.concatenate([dev2, dev2[:, _TURNED]])
+    argument = np.concatenate([scene.first, scene.second])
+    referent = np.concatenate([scene.second, scene.first])
+    inter = np.concatenate([scene.intersection, scene.intersection])
+    area_a, area_b = scene.area[argument], scene.area[referent]
+    smaller = np.minimum(area_a, area_b)
+    intersecting = inter > 1e-12 * smaller
+    overlap = np.where(intersecting, inter / area_a, 0.0)
+    referent_overlap = np.where(intersecting, inter / area_b, 0.0)
+    # The coverage of F0 turned by half a turn is the same (see pairs._both_ways).
+    coverage = np.tile(coverages(scene.f0, t), 2)
+    decisions = decide_pairs(
+        (deg0, deg2), dev2, sector_shares(f0), (overlap, referent_overlap), coverage, t
     )
-    return {k: (swept.f0[q], swept.f2[q], bool(swept.hybrid[q])) for q, k in enumerate(prepared)}
+    vertical = _verticals(argument, referent, inter / np.maximum(smaller, 1e-300), extents, t)
+    has_vertical = np.array([v is not None for v in vertical], dtype=bool).reshape(-1)
+    confidence = decisions.confidence
+    confidence = np.where(
+        has_vertical, np.maximum(confidence, np.minimum(1.0, 2.0 * overlap)), confidence
+    )
+    d = decisions
+    confidence = np.minimum(np.maximum(confidence, 0.0), 1.0)
+    per_row = [d.deviation, d.coverage, d.extends_share, overlap, referent_overlap]
+    numbers = np.column_stack(
+        [deg0, deg2, 0.5 * (deg0 + deg2), dev0, dev2, confidence, *per_row, inter, area_a, area_b]
+    ).tolist()
+    rows = _rows_in_order(len(labels), p)
+    names = (
+        [labels[k] for k in argument.tolist()],
+        [labels[k] for k in referent.tolist()],
+    )
+    words = _words(decisions)
+    hybrid = np.concatenate([scene.hybrid, scene.hybrid]).tolist()
+    return _build(rows, (names, words, vertical, hybrid), numbers, (list(f0), list(f2)), decisions)
+
+
+def _rows_in_order(n: int, p: int) -> list[int]:
+    """The row of each ordered pair ``(i, j)``, ``i != j``, in the order ``(0, 1), (0, 2), ...``:
+    pair ``k`` of ``np.triu_indices(n, 1)`` for ``i < j``, ``P + k`` for ``(j, i)``."""
+    i, j = np.divmod(np.arange(n * n), n)
+    i, j = i[i != j], j[i != j]
+    lo, hi = np.minimum(i, j), np.maximum(i, j)
+    k = lo * n - lo * (lo + 1) // 2 + (hi - lo - 1)
+    return np.where(i < j, k, p + k).tolist()
+
+
+def _words(decisions: PairDecisions) -> tuple[list[str | None], ...]:
+    """The words of every row: kind, primary, secondary, hedge, secondary hedge."""
+    # Index -1 (no word) picks the None at the end of each table.
+    tables = [
+        (KINDS, decisions.kind),
+        ((*DIRECTIONS, "surrounded"), decisions.primary),
+        ((*DIRECTIONS, None), decisions.secondary),
+        ((*HEDGES, None), decisions.hedge),
+        ((*SECONDARY_HEDGES, None), decisions.secondary_hedge),
+    ]
+    return tuple(np.array(table, dtype=object)[codes].tolist() for table, codes in tables)
+
+
+def _verticals(
+    argument: NDArray[np.intp],
+    referent: NDArray[np.intp],
+    horizontal_overlap: NDArray[np.float64],
+    extents: Sequence[tuple[float, float, float]] | None,
+    t: Thresholds,
+) -> list[str | None]:
+    """The vertical relation of every row (:func:`vertical_relation`; None without heights
+    or where the footprints overlap by less than ``vertical_overlap``)."""
+    found: list[str | None] = [None] * len(argument)
+    if extents is None:
+        return found
+    for r in np.flatnonzero(horizontal_overlap >= t.vertical_overlap).tolist():
+        found[r] = _vertical_rule(extents[argument[r]], extents[referent[r]], t)
+    return found
+
+
+def _build(
+    rows: list[int],
+    words: tuple[
+        tuple[list[str], list[str]], tuple[list[str | None], ...], list[str | None], list[bool]
+    ],
+    numbers: list[list[float]],
+    histograms: tuple[list[NDArray[np.float64]], list[NDArray[np.float64]]],
+    decisions: PairDecisions,
+) -> list[tuple[Relation, PairHistograms]]:
+    """Each row's :class:`Relation` and :class:`PairHistograms`, rows in the order given.
+
+    The objects are the ones ``Relation(...)`` and ``PairHistograms(...)`` make (the same
+    fields, in the same order); they are filled through ``__dict__`` because a frozen
+    dataclass' ``__init__`` sets each of its 23 fields through ``object.__setattr__``, which
+    would cost more than the rule base itself.
+    """
+    (arguments, referents), (kinds, primaries, secondaries, hedges, sec_hedges), verticals = words[
+        :3
+    ]
+    hybrid = words[3]
+    f0s, f2s = histograms
+    templates, vertical_templates = sentence_templates(decisions)
+    new = object.__new__
+    out = []
+    for r in rows:
+        v = numbers[r]
+        argument, referent, vertical = arguments[r], referents[r], verticals[r]
+        horizontal = templates[r].format(argument=argument, referent=referent)
+        sentence = (
+            horizontal
+            if vertical is None
+            else vertical_templates[vertical].format(argument=argument, referent=referent)
+        )
+        rel = new(Relation)
+        rel.__dict__.update(
+            argument=argument,
+            referent=referent,
+            primary=primaries[r],
+            secondary=secondaries[r],
+            hedge=hedges[r],
+            sentence=sentence,
+            confidence=v[20],
+            secondary_hedge=sec_hedges[r],
+            kind=kinds[r],
+            horizontal_sentence=horizontal,
+            degrees0={"right": v[0], "behind": v[1], "left": v[2], "front": v[3]},
+            degrees2={"right": v[4], "behind": v[5], "left": v[6], "front": v[7]},
+            degrees={"right": v[8], "behind": v[9], "left": v[10], "front": v[11]},
+            deviation0={"right": v[12], "behind": v[13], "left": v[14], "front": v[15]},
+            deviation2={"right": v[16], "behind": v[17], "left": v[18], "front": v[19]},
+            deviation=v[21],
+            coverage=v[22],
+            extends_share=v[23],
+            overlap=v[24],
+            referent_overlap=v[25],
+            vertical=vertical,
+            hybrid=hybrid[r],
+            frame="object",
+        )
+        hist = new(PairHistograms)
+        hist.__dict__.update(
+            f0=f0s[r], f2=f2s[r], hybrid=hybrid[r], intersection=v[26], area_a=v[27], area_b=v[28]
+        )
+        out.append((rel, hist))
+    return out
 
 
 def relate(

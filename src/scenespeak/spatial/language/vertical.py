@@ -73,12 +73,25 @@ def vertical_relation(
         raise InputError("horizontal_overlap", f"must be a fraction >= 0, got {horizontal_overlap}")
     if horizontal_overlap < t.vertical_overlap:
         return None
-    a_lo, a_hi = np.percentile(a, [5.0, 95.0])
-    b_lo, b_hi = np.percentile(b, [5.0, 95.0])
+    return _vertical_rule(_extent(a), _extent(b), t)
+
+
+def _extent(h: NDArray[np.float64]) -> tuple[float, float, float]:
+    """An object's vertical extent for :func:`vertical_relation`: the 5th and 95th percentiles
+    and the median of its points' heights."""
+    lo, hi = np.percentile(h, [5.0, 95.0])
+    return float(lo), float(hi), float(np.median(h))
+
+
+def _vertical_rule(
+    a: tuple[float, float, float], b: tuple[float, float, float], t: Thresholds
+) -> str | None:
+    """The rule of :func:`vertical_relation` on two :func:`_extent` (footprints overlapping)."""
+    a_lo, a_hi, a_mid = a
+    b_lo, b_hi, b_mid = b
     tol = max(t.contact_tolerance, t.contact_fraction * min(a_hi - a_lo, b_hi - b_lo))
-    a_mid, b_mid = float(np.median(a)), float(np.median(b))
-    gap_ab = float(a_lo - b_hi)
-    gap_ba = float(b_lo - a_hi)
+    gap_ab = a_lo - b_hi
+    gap_ba = b_lo - a_hi
     if a_mid > b_mid and gap_ab >= -tol:
         return "on top of" if gap_ab <= tol else "above"
     if b_mid > a_mid and gap_ba >= -tol:
