@@ -343,16 +343,49 @@ def four_direction_degrees(
         index = np.tile(np.arange(4) * n, rows)
         d, t, _, _ = many_degrees(np.repeat(h, 4, axis=0), index)
         return d.reshape(rows, 4), t.reshape(rows, 4)
-    degree = np.empty((rows, 4))
-    deviation = np.empty((rows, 4))
-    turns = [(k * n + np.arange(nbins)) % nbins for k in range(4)]
-    for lo in range(0, rows, DEGREE_BLOCK):
-        hi = min(lo + DEGREE_BLOCK, rows)
-        block = h[lo:hi]
-        for k, turn in enumerate(turns):
-            found = _turned_degrees(np.take(block, turn, axis=1))
-            degree[lo:hi, k], deviation[lo:hi, k] = found[0], found[1]
+    # A direction with no force within 90° of it has no effective force: degree and
+    # deviation 0 (as direction_degree finds), so only the other (row, direction) are computed.
+    degree = np.zeros((rows, 4))
+    deviation = np.zeros((rows, 4))
+    run = np.zeros((rows, 2 * nbins + 1), dtype=np.intp)
+    np.cumsum(np.concatenate([h != 0.0, h != 0.0], axis=1), axis=1, out=run[:, 1:])
+    for k in range(4):
+        start = (k * n - (n - 1)) % nbins  # the bins -(n-1) .. n-1 around the direction
+        live = np.flatnonzero(run[:, start + 2 * n - 1] > run[:, start])
+        turn = (k * n + np.arange(nbins)) % nbins
+        for lo in range(0, live.size, DEGREE_BLOCK):
+            at = live[lo : lo + DEGREE_BLOCK]
+            found = _turned_degrees(h[at[:, None], turn])
+            degree[at, k], deviation[at, k] = found[0], found[1]
     return degree, deviation
+
+
+def _cancelled(
+    fav: NDArray[np.float64], moment: NDArray[np.float64], dist: NDArray[np.float64]
+) -> NDArray[np.float64]:
+    """:func:`_cancel_side` of every row of ``fav`` (in place) with its ``moment``: the
+    cancelled mass of each row (rows without a moment cancel nothing, 0.0)."""
+    cancelled = np.zeros(len(fav))
+    rows = np.flatnonzero(moment > 0.0)
+    if rows.size == 0:
+        return cancelled
+    n = fav.shape[1]
+    side, moment = fav[rows], moment[rows]
+    cum = np.cumsum(side * dist, axis=1)
+    full = (cum <= moment[:, None]).sum(axis=1)  # searchsorted "right"
+    done = _prefix_sums(side, full)
+    side[np.arange(n) < full[:, None]] = 0.0
+    every = np.arange(len(rows))
+    at = np.minimum(full, n - 1)
+    left = moment - np.where(full > 0, cum[every, np.maximum(full - 1, 0)], 0.0)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        part = np.minimum(side[every, at], left / dist[at])
+    cut = np.flatnonzero((full < n) & (left > 0.0) & (dist[at] > 0.0))
+    side[cut, at[cut]] -= part[cut]
+    done[cut] += part[cut]
+    fav[rows] = side
+    cancelled[rows] = done
+    return cancelled
 
 
 def _turned_degrees(g: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -371,21 +404,7 @@ def _turned_degrees(g: NDArray[np.float64]) -> NDArray[np.float64]:
     moment = _row_dots(con, c.arm) + np.concatenate([opposite, opposite]) * n
     con_sum = con.sum(axis=1)
     contrary = (con_sum[:rows] + con_sum[rows:]) + 2.0 * opposite
-    # _cancel_side on both sides of every row (fav is ordered from the pivot inwards).
-    dist = c.dist
-    cum = np.cumsum(fav * dist, axis=1)
-    active = moment > 0.0
-    full = np.where(active, (cum <= moment[:, None]).sum(axis=1), 0)  # searchsorted "right"
-    cancelled = _prefix_sums(fav, full)
-    fav[np.arange(n) < full[:, None]] = 0.0
-    sides = np.arange(2 * rows)
-    at = np.minimum(full, n - 1)
-    left = moment - np.where(full > 0, cum[sides, np.maximum(full - 1, 0)], 0.0)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        part = np.minimum(fav[sides, at], left / dist[at])
-    cut = np.flatnonzero(active & (full < n) & (left > 0.0) & (dist[at] > 0.0))
-    fav[cut, at[cut]] -= part[cut]
-    cancelled[cut] += part[cut]
+    cancelled = _cancelled(fav, moment, c.dist)
     contrary = (contrary + cancelled[:rows]) + cancelled[rows:]
     fav_pos, fav_neg = fav[:rows], fav[rows:]
     eff = np.concatenate(

@@ -35,6 +35,8 @@ The package's modules, one concern each:
 - :mod:`~.rules` — histograms → a decision (:func:`describe_relation`);
 - :mod:`~.vertical` — :func:`vertical_relation` from the points' heights;
 - :mod:`~.pairs` — polygons → :class:`PairHistograms` → both relations of a pair;
+- :mod:`~.scenepairs` — every pair of a scene's polygons: overlaps and histograms, as arrays;
+- :mod:`~.batch` — the rule base on arrays of pairs (what :mod:`~.rules` does for one pair);
 - :mod:`~.relate` — :func:`relate` (one pair) and :func:`relate_objects` (every pair);
 - :mod:`~.viewer` — :func:`describe_viewer_relation` (the camera as the referent);
 - :mod:`~.summary` — :func:`summarize_scene`;

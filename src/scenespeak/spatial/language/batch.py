@@ -86,8 +86,8 @@ def coverages(f0: NDArray[np.float64], t: Thresholds) -> NDArray[np.float64]:
     --------
     >>> from scenespeak.spatial.language import DEFAULT_THRESHOLDS
     >>> h = np.zeros((2, 180)); h[0, 10:30] = 1.0; h[1] = 1.0
-    >>> coverages(h, DEFAULT_THRESHOLDS).tolist()     # 20 bins + 2 x 10 of smoothing; all
-    [0.2222222222222222, 1.0]
+    >>> coverages(h, DEFAULT_THRESHOLDS).tolist()     # 20 bins and 4 each side; all
+    [0.15555555555555556, 1.0]
     """
     rows, nbins = f0.shape
     out = np.zeros(rows)
@@ -171,7 +171,7 @@ def decide_pairs(
     >>> from scenespeak.spatial.language import DEFAULT_THRESHOLDS
     >>> a = np.array([[0.0, 0.2, 0.8, 0.0]])               # left, leaning behind
     >>> z = np.zeros(1)
-    >>> got = decide_pairs((a, a), np.full((1, 4), 0.3), np.zeros((1, 4)), (z, z), z,
+    >>> got = decide_pairs((a, a), np.full((1, 4), -0.3), np.zeros((1, 4)), (z, z), z,
     ...                    DEFAULT_THRESHOLDS)
     >>> DIRECTIONS[got.primary[0]], DIRECTIONS[got.secondary[0]]
     ('left', 'behind')
