@@ -1,15 +1,20 @@
 """Benchmark of ``language.relate_objects`` on scenes of n objects (every ordered pair).
 
 Prints, for n = 10, 25, 50, 100 convex hulls of 8-22 vertices (5-25 cm across, laid out on a
-floor like the pipeline's objects), the median wall-clock time of ``relate_objects`` and its
-parts: preparing and sweeping all pairs (``forces.prepare`` + ``forces.f0_f2_pairs``) and the
-rest (degrees of truth, rule base, sentences). The growth exponent between consecutive sizes
-is ``log(t2 / t1) / log(n2 / n1)`` (2 means time grows as the number of pairs).
+floor like the pipeline's objects), the median time of ``relate_objects`` and its parts:
+preparing and sweeping all pairs (``forces.prepare`` + ``forces.f0_f2_pairs``) and the rest
+(overlaps, degrees of truth, rule base, sentences, results). The growth exponent between
+consecutive sizes is ``log(t2 / t1) / log(n2 / n1)`` (2 means time grows as the number of
+pairs). For the smaller scenes it also times the per-pair path that ``relate_objects``
+replaces and is tested against (``pair_histograms`` + ``relations_of_pair`` for each pair),
+in the same run, and checks that both say the same sentences. The peak memory of one call
+(``tracemalloc``, results included) is measured in a separate call.
 
 Run::
 
-    python benchmarks/bench_relate.py            # a few minutes on a busy machine
-    python benchmarks/bench_relate.py --quick
+    python benchmarks/bench_relate.py              # a few minutes on a busy machine
+    python benchmarks/bench_relate.py --quick      # fewer repeats
+    python benchmarks/bench_relate.py --clock cpu  # process CPU time instead of wall clock
 """
 
 from __future__ import annotations
@@ -19,13 +24,17 @@ import math
 import os
 import statistics
 import time
+import tracemalloc
 from collections.abc import Callable
 
 import numpy as np
 from numpy.typing import NDArray
 
-from scenespeak.language import relate_objects
+from scenespeak.language import pair_histograms, relate_objects, relations_of_pair
 from scenespeak.spatial.forces import compiled, f0_f2_pairs, prepare
+
+#: The issue's target for 100 objects (seconds).
+TARGET_S = 0.2
 
 
 def scene(n: int, seed: int = 0) -> list[NDArray[np.float64]]:
@@ -42,37 +51,97 @@ def scene(n: int, seed: int = 0) -> list[NDArray[np.float64]]:
     return hulls
 
 
-def median_s(fn: Callable[[], object], repeat: int) -> float:
+def per_pair(hulls: list[NDArray[np.float64]], names: list[str]) -> list[str]:
+    """The sentences of every ordered pair through the per-pair functions (the reference)."""
+    found: dict[tuple[int, int], str] = {}
+    for i in range(len(hulls)):
+        for j in range(i + 1, len(hulls)):
+            pair = pair_histograms(hulls[i], hulls[j])
+            ab, ba = relations_of_pair(pair, argument=names[i], referent=names[j])
+            found[i, j], found[j, i] = ab.sentence, ba.sentence
+    n = len(hulls)
+    return [found[i, j] for i in range(n) for j in range(n) if i != j]
+
+
+def median_s(fn: Callable[[], object], repeat: int, clock: Callable[[], float]) -> float:
     fn()
     times = []
     for _ in range(repeat):
-        t0 = time.perf_counter()
+        t0 = clock()
         fn()
-        times.append(time.perf_counter() - t0)
+        times.append(clock() - t0)
     return statistics.median(times)
+
+
+def peak_mb(fn: Callable[[], object]) -> float:
+    """Peak traced memory (MB) of one call, its result included."""
+    tracemalloc.start()
+    try:
+        result = fn()
+        peak = tracemalloc.get_traced_memory()[1]
+        del result
+    finally:
+        tracemalloc.stop()
+    return peak / 1e6
+
+
+def load() -> str:
+    return " ".join(f"{x:.2f}" for x in os.getloadavg())
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help="fewer repeats")
+    parser.add_argument("--clock", choices=["wall", "cpu"], default="wall")
+    parser.add_argument("--sizes", type=int, nargs="+", default=[10, 25, 50, 100])
+    parser.add_argument(
+        "--per-pair-up-to", type=int, default=25, help="time the per-pair path up to this n"
+    )
     args = parser.parse_args()
-    print(f"load average before: {' '.join(f'{x:.2f}' for x in os.getloadavg())}")
-    print(f"compiled kernel: {compiled()}\n")
-    print("| objects | ordered pairs | relate_objects (s) | of which forces (s) | growth |")
-    print("| ---: | ---: | ---: | ---: | ---: |")
+    clock = time.perf_counter if args.clock == "wall" else time.process_time
+    print(f"load average before: {load()}")
+    print(f"compiled kernel: {compiled()}; clock: {args.clock}; medians\n")
+    print(
+        "| objects | ordered pairs | relate_objects (s) | of which forces (s) | rest (s) "
+        "| growth | per-pair path (s) | speed-up | peak memory (MB) | per pair (kB) |"
+    )
+    print("| ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
     last: tuple[int, float] | None = None
-    for n in (10, 25, 50, 100):
+    first: tuple[int, float] | None = None
+    for n in args.sizes:
         hulls = scene(n)
         names = [f"object {k}" for k in range(n)]
-        repeat = (3 if args.quick else 7) if n <= 50 else (2 if args.quick else 5)
-        total = median_s(lambda h=hulls, nm=names: relate_objects(h, names=nm), repeat)
+        repeat = 3 if args.quick else 7
+        total = median_s(lambda h=hulls, nm=names: relate_objects(h, names=nm), repeat, clock)
         forces_only = median_s(
-            lambda h=hulls: f0_f2_pairs([prepare(p, "o") for p in h], directions=180), repeat
+            lambda h=hulls: f0_f2_pairs([prepare(p, "o") for p in h], directions=180),
+            repeat,
+            clock,
         )
+        reference, ratio = "", ""
+        if n <= args.per_pair_up_to:
+            said = [rel.sentence for rel, _ in relate_objects(hulls, names=names)]
+            assert said == per_pair(hulls, names), "relate_objects and the per-pair path differ"
+            slow = median_s(
+                lambda h=hulls, nm=names: per_pair(h, nm), 1 if args.quick else 3, clock
+            )
+            reference, ratio = f"{slow:.3f}", f"{slow / total:.0f}×"
+        memory = peak_mb(lambda h=hulls, nm=names: relate_objects(h, names=nm))
         growth = "" if last is None else f"{math.log(total / last[1]) / math.log(n / last[0]):.2f}"
-        print(f"| {n} | {n * (n - 1)} | {total:.3f} | {forces_only:.3f} | {growth} |")
+        print(
+            f"| {n} | {n * (n - 1)} | {total:.3f} | {forces_only:.3f} | {total - forces_only:.3f} "
+            f"| {growth} | {reference} | {ratio} | {memory:.1f} "
+            f"| {1e3 * memory / max(n * (n - 1), 1):.1f} |"
+        )
+        first = first or (n, total)
         last = (n, total)
-    print(f"\nload average after: {' '.join(f'{x:.2f}' for x in os.getloadavg())}")
+    if first is not None and last is not None and last[0] > first[0]:
+        overall = math.log(last[1] / first[1]) / math.log(last[0] / first[0])
+        print(f"\ngrowth {first[0]} -> {last[0]} objects: n^{overall:.2f}")
+    if last is not None and last[0] == 100:
+        verdict = "met" if last[1] <= TARGET_S else "NOT met"
+        print(f"target: 100 objects <= {TARGET_S} s: {verdict} ({last[1]:.3f} s)")
+    print(f"load average after: {load()}")
 
 
 if __name__ == "__main__":
