@@ -11,6 +11,7 @@ Run::
     python benchmarks/eval_watch.py                      # frozen set (report this)
     python benchmarks/eval_watch.py --seeds 100 101      # tuning set
     python benchmarks/eval_watch.py --json out.json
+    python benchmarks/eval_watch.py --rgbd               # RGB-D + masks (cache/rgbd)
 
 The data are generated once into ``--cache`` (``benchmarks/livecache.py``).
 """
@@ -28,20 +29,47 @@ from livecache import DEFAULT_CACHE, FROZEN_SEEDS, database, sequences
 from scenespeak.tools.live_evaluation import run_sequence, score_sequence, summarize
 
 
+def run_rgbd_sequence(seq) -> tuple[list[dict], float]:
+    """The sequence's RGB-D + masks frames (left camera: ``NNNN/depth.png``, ``masks.png``,
+    ``labels.json``) through ``RGBDStream``; the JSON lines and the seconds in ``process``."""
+    import time
+
+    from scenespeak.live.rgbd_stream import RGBDStream
+    from scenespeak.perception.depth import load_depth
+    from scenespeak.perception.intrinsics import load_intrinsics
+    from scenespeak.perception.masks import load_instances, load_labels
+
+    stream = RGBDStream(load_intrinsics(Path(seq.root) / "intrinsics.json"))
+    lines, spent = [], 0.0
+    for k in range(len(seq.frames)):
+        d = Path(seq.root) / f"{k:04d}"
+        depth, masks = load_depth(d / "depth.png"), load_instances(d / "masks.png")
+        labels = load_labels(d / "labels.json")
+        t0 = time.perf_counter()
+        frame = stream.process(depth, masks, labels, time_s=k / 30.0)
+        spent += time.perf_counter() - t0
+        lines.append(frame.to_dict())
+    return lines, spent
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seeds", type=int, nargs="+", default=list(FROZEN_SEEDS))
     ap.add_argument("--frames", type=int, default=24)
     ap.add_argument("--cache", type=Path, default=DEFAULT_CACHE)
     ap.add_argument("--json", type=Path, default=None)
+    ap.add_argument(
+        "--rgbd", action="store_true", help="RGB-D + masks frames through RGBDStream (no database)"
+    )
     args = ap.parse_args(argv)
-    db = database(args.cache)
-    seqs = sequences(args.cache, tuple(args.seeds), args.frames)
+    cache = args.cache / "rgbd" if args.rgbd else args.cache
+    db = None if args.rgbd else database(args.cache)
+    seqs = sequences(cache, tuple(args.seeds), args.frames)
     scores = []
     print(f"{'sequence':12} {'ids kept':>10} {'flicker':>8} {'static chg':>10} "
           f"{'events':>7} {'false':>6}  delays   missed / false")  # fmt: skip
     for seq in seqs:
-        lines, _ = run_sequence(seq, db)
+        lines, _ = run_rgbd_sequence(seq) if args.rgbd else run_sequence(seq, db)
         s = score_sequence(seq, lines)
         scores.append(s)
         print(

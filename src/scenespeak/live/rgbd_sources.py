@@ -33,7 +33,13 @@ from scenespeak.live.sources import _NUM, BrokenFrame, _image_from_msg, _reader,
 from scenespeak.perception.depth import DEFAULT_DEPTH_SCALE, depth_to_metres
 from scenespeak.perception.intrinsics import Intrinsics
 
-__all__ = ["RGBDFrame", "folder_rgbd_frames", "rosbag_intrinsics", "rosbag_rgbd_frames"]
+__all__ = [
+    "RGBDFrame",
+    "folder_rgbd_frames",
+    "present_labels",
+    "rosbag_intrinsics",
+    "rosbag_rgbd_frames",
+]
 
 COLOR_NAMES = ("color.png", "color.jpg", "left.png", "left.jpg", "rgb.png")
 DEPTH_NAMES = ("depth.png", "depth.tif", "depth.tiff", "depth.npy")
@@ -122,8 +128,20 @@ def _read_frame(
             raise InputError(name, f"has no colour image ({' / '.join(COLOR_NAMES)})")
         color = load_image(color_p, gray=False)
     masks = None if masks_p is None else load_instances(masks_p)
-    names = load_labels(labels_p) if labels_p is not None else labels
-    return color, depth, masks, names
+    if labels_p is not None:  # this frame's own labels: checked against its masks
+        return color, depth, masks, load_labels(labels_p)
+    return color, depth, masks, present_labels(labels, masks)
+
+
+def present_labels(
+    labels: Mapping[int, str] | None, masks: NDArray[np.integer[Any]] | None
+) -> Mapping[int, str] | None:
+    """The stream's labels (one file for every frame) of the instances in this frame's masks:
+    an instance out of sight this frame is not an error."""
+    if labels is None or masks is None:
+        return labels
+    counts = np.bincount(np.asarray(masks).ravel().clip(0).astype(np.intp))
+    return {k: v for k, v in labels.items() if 0 <= k < len(counts) and counts[k]}
 
 
 def folder_rgbd_frames(
@@ -334,6 +352,13 @@ def _groups(
             continue
         items = {r: pending[r].pop(i)[1] for r, i in found.items()}
         state["t0"] = stamp if state["t0"] is None else state["t0"]
+        masks = items.get("masks")
         yield RGBDFrame(
-            k, (stamp - state["t0"]) / 1e9, items["color"], depth, items.get("masks"), labels, where
+            k,
+            (stamp - state["t0"]) / 1e9,
+            items["color"],
+            depth,
+            masks,
+            present_labels(labels, masks),
+            where,
         )

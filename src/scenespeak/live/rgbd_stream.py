@@ -9,7 +9,8 @@ stream's tracks by label and 3-D distance (Hungarian assignment, within ``match_
 ``unseen_distance`` for a track not seen last frame); an unmatched object gets a new id (ids
 are never reused). A track without an object this frame is not seen: ``"out of view"`` when
 its last box touched the image's border, otherwise ``"hidden"`` behind the nearer seen object
-whose box covers it most (or out of view when none does). The memory (hull and word
+whose box meets its last box grown by half its size (the last glimpse of an object going behind
+another lies beside that one's box), or out of view when none does. The memory (hull and word
 hysteresis, events) is the stereo stream's, and so is the JSON line
 (:meth:`RGBDStreamFrame.to_dict`), with ``"source": "mask"`` (or ``"database"``) for a
 measured object and ``"remembered"`` for one not seen.
@@ -260,8 +261,7 @@ class RGBDStream:
         t1 = time.perf_counter()
         if not present:
             return [], up_source, {"up": t1 - t0, "objects": 0.0}
-        names = None if labels is None else {k: v for k, v in labels.items() if k in present}
-        inst = instances_from_array(m, names, size=size, source="masks")
+        inst = instances_from_array(m, labels, size=size, source="masks")
         out = [x for x in measure_masks(d, self.cam, inst, vec, o) if isinstance(x, MeasuredObject)]
         return out, up_source, {"up": t1 - t0, "objects": time.perf_counter() - t1}
 
@@ -323,7 +323,7 @@ class RGBDStream:
 
     def _unseen(self, t: RGBDTrack, seen: Sequence[RGBDTrack], width: int) -> RGBDTrack:
         """Why a track has no object this frame: out of view (its box was at the border) or
-        hidden behind the nearer seen object whose box covers it most."""
+        hidden behind the nearer seen object whose box meets most of its grown last box."""
         from dataclasses import replace
 
         if t.where != "seen":
@@ -332,18 +332,18 @@ class RGBDStream:
         margin = self.options.edge_margin
         if x0 <= margin or x1 >= width - margin or y0 <= margin or y1 >= self.cam.height - margin:
             return replace(t, where="out of view", source="remembered", behind=None)
-        cover, best = None, 0.2
-        area = max(1, (x1 - x0) * (y1 - y0))
+        # the last glimpse of an object going behind another lies beside that one's box: the
+        # box grown by half its size (at least 10 px) must meet the nearer object's box
+        gx, gy = max(10.0, 0.5 * (x1 - x0)), max(10.0, 0.5 * (y1 - y0))
+        cover, best = None, 0.0
         for s in seen:
             ox0, oy0, ox1, oy1 = s.box
-            inter = max(0, min(x1, ox1) - max(x0, ox0)) * max(0, min(y1, oy1) - max(y0, oy0))
-            nearer = (
-                s.object.centroid is not None
-                and t.object.centroid is not None
-                and s.object.centroid[2] < t.object.centroid[2]
+            inter = max(0.0, min(x1 + gx, ox1) - max(x0 - gx, ox0)) * max(
+                0.0, min(y1 + gy, oy1) - max(y0 - gy, oy0)
             )
-            if nearer and inter / area > best:
-                cover, best = s.id, inter / area
+            sc, tc = s.object.centroid, t.object.centroid
+            if sc is not None and tc is not None and sc[2] < tc[2] and inter > best:
+                cover, best = s.id, inter
         if cover is None:
             return replace(t, where="out of view", source="remembered", behind=None)
         return replace(t, where="hidden", source="remembered", behind=cover)
