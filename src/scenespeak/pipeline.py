@@ -43,284 +43,154 @@ import time
 from collections.abc import Callable, Iterator, Mapping
 from concurrent.futures import Future, ThreadPoolExecutor
 from contextlib import contextmanager
-from dataclasses import dataclass, field
+from dataclasses import dataclass, replace
 from os import PathLike
 from pathlib import Path
 from typing import Any
 
-import cv2
 import numpy as np
 from numpy.typing import NDArray
 
+from scenespeak.description import PairRelation, SceneDescription
 from scenespeak.errors import DatabaseError, ImageError, InputError
 from scenespeak.perception.blas import single_threaded_blas
-from scenespeak.perception.features import detect, to_gray
-from scenespeak.perception.objects import SceneObject, Skipped, build_objects, make_object
+from scenespeak.perception.features import Features, detect, to_gray
+from scenespeak.perception.objects import ObjectOptions, SceneObject
+from scenespeak.perception.recognition.options import LabelOptions
+from scenespeak.perception.recognition.results import Labelling
+from scenespeak.perception.scene_objects import StrategyOptions, scene_objects
+from scenespeak.perception.scene_objects import outline_mask as _outline_mask  # noqa: F401  (pipeline_rgbd)
+from scenespeak.perception.stage_options import StereoOptions
+from scenespeak.perception.stereo import StereoResult
+from scenespeak.spatial.options import RelationOptions
 
 __all__ = [
+    "LabelOptions",
+    "ObjectOptions",
     "PairRelation",
     "PipelineOptions",
+    "RelationOptions",
     "SceneDescription",
+    "StereoOptions",
+    "StrategyOptions",
     "database_from_dataset",
     "describe_files",
     "describe_scene",
 ]
 
 
-@dataclass(frozen=True)
+#: The flat keywords of :class:`PipelineOptions` (one knob each, as the CLI and the callers
+#: name them) → (the stage's options field, the field there).
+FLAT_OPTIONS: dict[str, tuple[str, str]] = {
+    "ratio": ("stereo", "ratio"),
+    "dense_crop": ("stereo", "dense_crop"),
+    "dense_margin": ("stereo", "dense_margin"),
+    "label_ratio": ("labels", "ratio"),
+    "min_inliers": ("labels", "min_inliers"),
+    "min_inliers_small": ("labels", "min_inliers_small"),
+    "small_area": ("labels", "small_area"),
+    "dense": ("strategy", "dense"),
+    "dense_min_points": ("strategy", "dense_min_points"),
+    "dense_max_points": ("strategy", "dense_max_points"),
+    "geometry": ("strategy", "geometry"),
+    "unknown": ("strategy", "unknown"),
+    "unknown_max_distance": ("strategy", "unknown_max_distance"),
+    "min_points": ("objects", "min_points"),
+    "outliers": ("objects", "outliers"),
+    "radius": ("objects", "radius"),
+    "eps": ("objects", "eps"),
+    "directions": ("relations", "directions"),
+    "summary": ("relations", "summary"),
+}
+
+
+@dataclass(frozen=True, init=False)
 class PipelineOptions:
-    """Knobs of :func:`describe_scene` (defaults are the ones the CLI uses).
+    """Knobs of :func:`describe_scene`: each stage's own options (defaults: the CLI's).
 
     Attributes
     ----------
-    ratio : float
-        Lowe's ratio for left/right matching (the paper's 0.6).
-    label_ratio : float
-        Ratio test for labelling against the database (the second neighbour is the nearest
-        descriptor of another object, so a looser value than for stereo is right).
-    min_inliers : int
-        Geometric inliers needed to accept a recognised object.
-    min_inliers_small, small_area : int, float
-        A *small* detection (its outline in the scene covers at most ``small_area`` square
-        pixels: a far object, with few keypoints) needs only ``min_inliers_small`` inliers at
-        distinct positions (``ObjectDatabase.label``; figures in ``docs/database.md``).
-    dense : bool
-        Take recognised objects' points from dense stereo inside their carried outline.
-    dense_min_points : int
-        Fewer valid dense points than this: fall back to the keypoints.
-    dense_max_points : int
-        Dense points used per object (an even random sample of the region's pixels).
-    dense_crop : bool
-        Compute the dense map only over the bounding box of the stereo matches it verifies,
-        plus ``dense_margin`` pixels (``stereo.stereo_points(dense_crop=True)``), not the whole
-        image. A recognised outline reaches beyond that box only by a few textureless pixels,
-        where SGBM finds little anyway (``docs/calibration.md``); the map does not wait for the
-        labels, so it is computed while the objects are recognised.
-    dense_margin : int
-        Pixels around the matches' box for ``dense_crop``.
-    unknown : bool
-        Cluster unlabelled keypoints into unknown objects.
-    unknown_max_distance : float
-        Unknown clusters farther than this from the camera (metres) are background, not
-        objects (the seed paper's scenes are 0.5–2 m away).
-    min_points : int
-        Points an object needs after outlier removal (3 for a hull; see ``objects.make_object``).
-    outliers : str
-        ``"both"``, ``"radius"``, ``"dbscan"`` or ``"none"`` (see ``objects.make_object``).
-    radius, eps : float
-        The paper's fixed radius and DBSCAN's neighbourhood radius, metres.
-    directions : int
-        Bins of the force histograms.
-    summary : bool
-        Also write a short scene summary (``language.summarize_scene``).
-    geometry : bool
-        Geometry first (``perception.scene_regions``): segments standing on the support plane,
-        named by keypoints, depth agreeing with the object's own (False: the carried outlines).
+    stereo : StereoOptions
+        Matching ratio and the cropped dense map (:mod:`scenespeak.perception.stage_options`).
+    labels : LabelOptions
+        Labelling against the database (:mod:`scenespeak.perception.recognition.options`).
+    strategy : StrategyOptions
+        Where objects' points come from: geometry first, dense regions, unknown clusters
+        (:mod:`scenespeak.perception.scene_objects`).
+    objects : ObjectOptions
+        Outlier removal and hulls (:mod:`scenespeak.perception.objects`).
+    relations : RelationOptions
+        Histogram directions and the summary (:mod:`scenespeak.spatial.options`).
     threads : int
         Threads one scene may use: 2 runs the two SIFT extractions at the same time and the
         stereo stage beside the labelling (module docstring); 1 runs every stage one after the
         other in the calling thread, for a process that already has one scene per core (a
         cluster worker, :mod:`scenespeak.tools.engine`). The result is the same either way.
+
+    The single knobs are also accepted and readable by their flat names
+    (:data:`FLAT_OPTIONS`: ``ratio``, ``label_ratio``, ``min_inliers``, ``min_inliers_small``,
+    ``small_area``, ``dense``, ``dense_min_points``, ``dense_max_points``, ``dense_crop``,
+    ``dense_margin``, ``unknown``, ``unknown_max_distance``, ``min_points``, ``outliers``,
+    ``radius``, ``eps``, ``directions``, ``summary``, ``geometry``), applied on top of the
+    stage options given.
+
+    Examples
+    --------
+    >>> opts = PipelineOptions(dense=False, threads=1)
+    >>> opts.strategy.dense, opts.dense, opts.labels.ratio, opts.label_ratio
+    (False, False, 0.8, 0.8)
+    >>> replace(opts, label_ratio=0.7).labels.ratio
+    0.7
     """
 
-    ratio: float = 0.6
-    label_ratio: float = 0.8
-    min_inliers: int = 8
-    min_inliers_small: int = 4
-    small_area: float = 8000.0
-    dense: bool = True
-    dense_min_points: int = 30
-    dense_max_points: int = 300
-    dense_crop: bool = True
-    dense_margin: int = 16
-    unknown: bool = True
-    unknown_max_distance: float = 2.5
-    min_points: int = 3
-    outliers: str = "both"
-    radius: float = 0.5
-    eps: float = 0.05
-    directions: int = 180
-    summary: bool = True
-    geometry: bool = True
-    threads: int = 2
+    stereo: StereoOptions
+    labels: LabelOptions
+    strategy: StrategyOptions
+    objects: ObjectOptions
+    relations: RelationOptions
+    threads: int
 
-    def __post_init__(self) -> None:
-        if self.threads not in (1, 2):
-            raise InputError("threads", f"must be 1 or 2, got {self.threads!r}")
-
-
-@dataclass(frozen=True, eq=False)
-class PairRelation:
-    """The relation of one ordered pair with the force histograms it was decided from.
-
-    Attributes
-    ----------
-    relation : Relation
-        The words and numbers of :mod:`scenespeak.spatial.language` (``primary``, ``secondary``,
-        ``sentence``, ``hedge``, ``vertical``, ...; also readable directly on this object).
-    f0, f2 : (directions,) float64
-        F0 and F2 of the argument relative to the referent; ``f2`` is the hybrid F02 where F2 is
-        undefined (touching or overlapping hulls, ``relation.hybrid``).
-    """
-
-    relation: Any
-    f0: NDArray[np.float64]
-    f2: NDArray[np.float64]
+    def __init__(
+        self,
+        stereo: StereoOptions | None = None,
+        labels: LabelOptions | None = None,
+        strategy: StrategyOptions | None = None,
+        objects: ObjectOptions | None = None,
+        relations: RelationOptions | None = None,
+        threads: int = 2,
+        **flat: object,
+    ) -> None:
+        stages: dict[str, object] = {
+            "stereo": stereo or StereoOptions(),
+            "labels": labels or LabelOptions(),
+            "strategy": strategy or StrategyOptions(),
+            "objects": objects or ObjectOptions(),
+            "relations": relations or RelationOptions(),
+        }
+        unknown = sorted(set(flat) - set(FLAT_OPTIONS))
+        if unknown:
+            raise TypeError(
+                f"PipelineOptions got unexpected keyword argument(s) {unknown}; "
+                f"the knobs are {sorted(FLAT_OPTIONS)}"
+            )
+        changes: dict[str, dict[str, object]] = {}
+        for key, value in flat.items():
+            stage, name = FLAT_OPTIONS[key]
+            changes.setdefault(stage, {})[name] = value
+        for stage, change in changes.items():
+            stages[stage] = replace(stages[stage], **change)  # type: ignore[type-var]
+        for stage, value in stages.items():
+            object.__setattr__(self, stage, value)
+        object.__setattr__(self, "threads", threads)
+        if threads not in (1, 2):
+            raise InputError("threads", f"must be 1 or 2, got {threads!r}")
 
     def __getattr__(self, name: str) -> Any:
-        # Only called for names that are not fields: read them from the Relation.
-        if name.startswith("__") or name in ("relation", "f0", "f2"):
-            raise AttributeError(name)
-        return getattr(self.relation, name)
-
-    def to_dict(self) -> dict[str, Any]:
-        """The ``relations`` entry of ``docs/interfaces.md`` plus ``Relation.to_dict``'s extras."""
-        rel = self.relation
-        head: dict[str, Any] = {
-            "argument": rel.argument,
-            "referent": rel.referent,
-            "primary": rel.primary,
-            "secondary": rel.secondary,
-            "sentence": rel.sentence,
-            "f0": [float(v) for v in self.f0],
-            "f2": [float(v) for v in self.f2],
-        }
-        head.update({k: v for k, v in rel.to_dict().items() if k not in head})
-        return head
-
-
-@dataclass(frozen=True, eq=False)
-class SceneDescription:
-    """Everything :func:`describe_scene` computed, stage by stage.
-
-    Attributes
-    ----------
-    left, right : ndarray
-        The input images (as given).
-    rig : StereoRig
-        The calibration.
-    features_left, features_right : Features
-        SIFT features of each image.
-    points : Points3D
-        Matched and triangulated keypoints (left camera frame).
-    stereo : StereoResult
-        The whole stereo stage (rectification, matches, the dense disparity map if computed).
-    point_labels : tuple of (str or None)
-        The object each stereo point was labelled with, None for unknown.
-    labelling : Labelling or None
-        The database's labelling of the left keypoints (with its detections).
-    objects : tuple of SceneObject
-        Described objects.
-    skipped : tuple of Skipped
-        Objects that could not be described, with the reason.
-    relations : tuple of PairRelation
-        Every ordered pair of described objects: the Relation and its histograms.
-    summary : str
-        A short paragraph about the scene ("" without objects or when switched off).
-    timings : dict of str to float
-        Seconds spent per stage: ``sift`` (the left image; the right one runs at the same time
-        in a second thread), ``label``, ``stereo`` (in the second thread, while ``label`` runs),
-        ``wait`` (for the stereo stage after labelling), ``objects``, ``relations``. The wall
-        time is about ``sift + label + wait + objects + relations``.
-    sources : dict of str to str
-        The files the inputs came from, when known.
-    """
-
-    left: NDArray[np.generic]
-    right: NDArray[np.generic]
-    rig: Any
-    features_left: Any
-    features_right: Any
-    points: Any
-    stereo: Any
-    point_labels: tuple[str | None, ...]
-    labelling: Any
-    objects: tuple[SceneObject, ...]
-    skipped: tuple[Skipped, ...]
-    relations: tuple[PairRelation, ...]
-    summary: str = ""
-    timings: Mapping[str, float] = field(default_factory=dict)
-    sources: Mapping[str, str] = field(default_factory=dict)
-
-    @property
-    def up(self) -> NDArray[np.float64]:
-        """The world's up direction in the left camera frame."""
-        return np.asarray(self.rig.up, dtype=np.float64)
-
-    @property
-    def detections(self) -> tuple[Any, ...]:
-        """Objects recognised in the left image (``Detection``), best first."""
-        return () if self.labelling is None else tuple(self.labelling.detections)
-
-    def object(self, label: str) -> SceneObject | None:
-        """The described object with this label, if any."""
-        for obj in self.objects:
-            if obj.label == label:
-                return obj
-        return None
-
-    def relation(self, argument: str, referent: str) -> PairRelation | None:
-        """The relation of ``argument`` to ``referent``, or None."""
-        for rel in self.relations:
-            if rel.argument == argument and rel.referent == referent:
-                return rel
-        return None
-
-    def to_dict(self) -> dict[str, Any]:
-        """The JSON of ``scenespeak describe --format json`` (``docs/interfaces.md``), plus extras.
-
-        ``objects`` (label, points, centroid, hull; extras: source, notes, plane_centroid,
-        height_range), ``relations`` (argument, referent, primary, secondary, sentence, f0, f2;
-        extras from :meth:`Relation.to_dict`), ``skipped`` (label, reason); extras ``summary``,
-        ``up``, ``camera`` (``focal_px``, ``baseline_m``: the depth error Z²·σ/(f·B) of the
-        dialogue's hedges), ``stereo_points``, ``timings_ms``.
-        """
-        objects = []
-        for o in self.objects:
-            objects.append(
-                {
-                    "label": o.label,
-                    "name": o.key,
-                    "confidence": round(float(o.confidence), 4),
-                    "points": int(o.n_points),
-                    "centroid": [float(v) for v in o.centroid],
-                    "hull": [[float(x), float(y)] for x, y in o.hull],
-                    "source": o.source,
-                    "notes": list(o.notes),
-                    "plane_centroid": [float(v) for v in o.plane_centroid],
-                    "height_range": [float(o.heights.min()), float(o.heights.max())],
-                }
-            )
-        relations = [rel.to_dict() for rel in self.relations]
-        return {
-            "objects": objects,
-            "relations": relations,
-            "skipped": [{"label": s.label, "reason": s.reason} for s in self.skipped],
-            "summary": self.summary,
-            "up": [float(v) for v in self.up],
-            "camera": _camera(self.rig),
-            "stereo_points": len(self.point_labels),
-            "timings_ms": {k: round(v * 1000.0, 2) for k, v in self.timings.items()},
-        }
-
-    def to_text(self) -> str:
-        """The sentences for people: every ordered pair, then what was not described."""
-        lines = [rel.sentence for rel in self.relations]
-        if not self.objects:
-            lines.append("No object could be described in this scene.")
-        elif len(self.objects) == 1:
-            lines.append(f"Only the {self.objects[0].label} was described: nothing to relate.")
-        for s in self.skipped:
-            lines.append(f"Not described: the {s.label} ({s.reason}).")
-        return "\n".join(lines)
-
-
-def _camera(rig: Any) -> dict[str, float]:
-    """Focal length (px) and baseline (m) of the rig, for the depth error of a scene's words."""
-    try:
-        return {"focal_px": float(rig.K_left[0][0]), "baseline_m": float(rig.baseline)}
-    except (AttributeError, TypeError, IndexError):
-        return {}
+        # Only called for names that are not fields: the flat knobs, read from their stage.
+        where = FLAT_OPTIONS.get(name)
+        if where is None:
+            raise AttributeError(f"PipelineOptions has no option {name!r}")
+        return getattr(object.__getattribute__(self, where[0]), where[1])
 
 
 # --------------------------------------------------------------------------------------------
@@ -334,23 +204,6 @@ def _timed(timings: dict[str, float], name: str) -> Iterator[None]:
         yield
     finally:
         timings[name] = timings.get(name, 0.0) + time.perf_counter() - t0
-
-
-def _outline_mask(outline: NDArray[np.float64], shape: tuple[int, int]) -> NDArray[np.bool_]:
-    """Fill a polygon (pixel coordinates, column/row) into a boolean mask of ``shape``."""
-    mask = np.zeros(shape, dtype=np.uint8)
-    pts = np.round(np.asarray(outline, dtype=np.float64) * 16).astype(np.int32)
-    if len(pts) >= 3:
-        cv2.fillPoly(mask, [pts.reshape(-1, 1, 2)], 1, lineType=cv2.LINE_8, shift=4)
-    return mask.astype(bool)
-
-
-def _points_inside(xy: NDArray[np.float64], mask: NDArray[np.bool_]) -> NDArray[np.bool_]:
-    h, w = mask.shape
-    c = np.clip(np.round(xy[:, 0]).astype(np.intp), 0, w - 1)
-    r = np.clip(np.round(xy[:, 1]).astype(np.intp), 0, h - 1)
-    inside = (xy[:, 0] >= -0.5) & (xy[:, 0] < w - 0.5) & (xy[:, 1] >= -0.5) & (xy[:, 1] < h - 0.5)
-    return inside & mask[r, c]
 
 
 def _relate_all(objects: tuple[SceneObject, ...], directions: int) -> list[PairRelation]:
@@ -433,8 +286,6 @@ def describe_scene(
     DatabaseError
         An empty database.
     """
-    from dataclasses import replace
-
     from scenespeak.perception import stereo
 
     opts = options or PipelineOptions()
@@ -467,46 +318,56 @@ def describe_scene(
         feats_l = detect(to_gray(left), precise_upscale=False)
         timings["sift"] = time.perf_counter() - t0
         future_st = pool.submit(
-            _stereo_stage, left, right, rig, opts, feats_l, future_r, (lname, rname), timings
+            _stereo_stage, left, right, rig, opts.stereo, feats_l, future_r, (lname, rname), timings
         )
         with _timed(timings, "label"):
-            labelling = db.label(
-                feats_l,
-                ratio=opts.label_ratio,
-                min_inliers=opts.min_inliers,
-                min_inliers_small=opts.min_inliers_small,
-                small_area=opts.small_area,
-            )
+            labelling: Labelling = db.label(feats_l, opts.labels)
         say("stereo")
         with _timed(timings, "wait"):
-            feats_r, result = future_st.result()
-        id_to_label = {o.id: o.label for o in db.list_objects()} if opts.geometry else {}
-        return _after_stereo(
-            left,
-            right,
-            opts,
-            src,
-            timings,
-            say,
-            feats_l,
-            feats_r,
-            result,
-            labelling,
-            lname,
-            id_to_label,
-        )
+            stage: StereoStage = future_st.result()
+        id_to_label = {o.id: o.label for o in db.list_objects()} if opts.strategy.geometry else {}
+        early = _EarlyStages((left, right), feats_l, stage, labelling, id_to_label)
+        return _after_stereo(early, opts, src, timings, say)
+
+
+@dataclass(frozen=True, eq=False)
+class StereoStage:
+    """What the stereo stage (the second thread) hands on to the rest of the chain.
+
+    Attributes
+    ----------
+    features_right : Features
+        SIFT features of the right image.
+    result : StereoResult
+        Matches, triangulated points, rectification and the dense map
+        (:func:`scenespeak.perception.stereo.stereo_points`).
+    """
+
+    features_right: Features
+    result: StereoResult
+
+
+@dataclass(frozen=True, eq=False)
+class _EarlyStages:
+    """Stages 1-2 of :func:`describe_scene`: the pair, the left features, stereo and labels."""
+
+    images: tuple[NDArray[np.generic], NDArray[np.generic]]
+    features_left: Features
+    stereo: StereoStage
+    labelling: Labelling
+    id_to_label: Mapping[int, str]
 
 
 def _stereo_stage(
     left: NDArray[np.generic],
     right: NDArray[np.generic],
     rig: Any,
-    opts: PipelineOptions,
-    feats_l: Any,
-    future_r: Future[Any],
+    opts: StereoOptions,
+    feats_l: Features,
+    future_r: Future[Features],
     names: tuple[str, str],
     timings: dict[str, float],
-) -> tuple[Any, Any]:
+) -> StereoStage:
     """The right image's features (from ``future_r``), then the stereo stage (worker thread)."""
     from scenespeak.perception import stereo
 
@@ -516,15 +377,13 @@ def _stereo_stage(
             left,
             right,
             rig,
-            ratio=opts.ratio,
             features_left=feats_l,
             features_right=feats_r,
             left_name=names[0],
             right_name=names[1],
-            dense_crop=opts.dense_crop,
-            dense_margin=opts.dense_margin,
+            **opts.keywords(),
         )
-    return feats_r, result
+    return StereoStage(feats_r, result)
 
 
 def _no_matches_error(src: Mapping[str, str], rig: Any, n_left: int, n_right: int) -> Exception:
@@ -547,41 +406,34 @@ def _no_matches_error(src: Mapping[str, str], rig: Any, n_left: int, n_right: in
 
 
 def _after_stereo(
-    left: NDArray[np.generic],
-    right: NDArray[np.generic],
+    early: _EarlyStages,
     opts: PipelineOptions,
     src: dict[str, str],
     timings: dict[str, float],
     say: Callable[[str], None],
-    feats_l: Any,
-    feats_r: Any,
-    result: Any,
-    labelling: Any,
-    lname: str,
-    id_to_label: dict[int, str] | None = None,
 ) -> SceneDescription:
     """Stages 3-5 of :func:`describe_scene` once the labels and the stereo points are known."""
+    result = early.stereo.result
     rig = result.rect.rig
     points = result.points
     if len(points.xyz) == 0:
-        raise _no_matches_error(src, rig, len(feats_l), len(feats_r))
-    kp_names = labelling.names()
+        raise _no_matches_error(
+            src, rig, len(early.features_left), len(early.stereo.features_right)
+        )
+    kp_names = early.labelling.names()
     point_labels = tuple(kp_names[int(i)] for i in points.left_index)
 
     say("objects")
     with _timed(timings, "objects"):
-        if _use_geometry(opts, result):
-            objects, skipped = _geometry_objects(
-                left.shape[:2], result, labelling, opts, id_to_label
-            )
-        else:
-            objects, skipped = _objects(left, right, result, point_labels, labelling, opts)
+        objects, skipped = scene_objects(
+            early.images, result, early.labelling, early.id_to_label, opts.strategy, opts.objects
+        )
 
     say("relations")
     with _timed(timings, "relations"):
-        relations = _relate_all(objects, opts.directions)
+        relations = _relate_all(objects, opts.relations.directions)
         summary = ""
-        if opts.summary and relations:
+        if opts.relations.summary and relations:
             from scenespeak.spatial.language import summarize_scene
 
             summary = summarize_scene(
@@ -590,15 +442,15 @@ def _after_stereo(
             )
 
     return SceneDescription(
-        left=left,
-        right=right,
+        left=early.images[0],
+        right=early.images[1],
         rig=rig,
-        features_left=feats_l,
-        features_right=feats_r,
+        features_left=early.features_left,
+        features_right=early.stereo.features_right,
         points=points,
         stereo=result,
         point_labels=point_labels,
-        labelling=labelling,
+        labelling=early.labelling,
         objects=objects,
         skipped=tuple(skipped),
         relations=tuple(relations),
@@ -606,177 +458,6 @@ def _after_stereo(
         timings=timings,
         sources=src,
     )
-
-
-def _objects(
-    left: NDArray[np.generic],
-    right: NDArray[np.generic],
-    result: Any,
-    point_labels: tuple[str | None, ...],
-    labelling: Any,
-    opts: PipelineOptions,
-) -> tuple[tuple[SceneObject, ...], list[Skipped]]:
-    """Known objects (dense region or keypoints), then unknown clusters."""
-    points = result.points
-    up = np.asarray(result.rect.rig.up, dtype=np.float64)
-    shape = left.shape[:2]
-    obj_opts: dict[str, Any] = {
-        "outliers": opts.outliers,
-        "radius": opts.radius,
-        "eps": opts.eps,
-        "min_points": opts.min_points,
-    }
-    labels_arr = np.array(["" if v is None else v for v in point_labels], dtype=object)
-    claimed = labels_arr != ""
-    objects: list[SceneObject] = []
-    skipped: list[Skipped] = []
-    masks = {d.label: _outline_mask(d.outline_in_scene, shape) for d in labelling.detections}
-    dense_xyz = (
-        _dense_regions(
-            left, right, result, _visible_parts(masks, points, labels_arr), opts.dense_max_points
-        )
-        if opts.dense
-        else {}
-    )
-    for det in labelling.detections:
-        name = det.label
-        claimed |= _points_inside(points.left_xy, masks[name])
-        kp = np.asarray(points.xyz)[labels_arr == name]
-        region = dense_xyz.get(name)
-        result_obj: SceneObject | Skipped
-        note = None
-        if region is not None and len(region) >= opts.dense_min_points:
-            result_obj = make_object(name, region, up, source="dense", **obj_opts)
-        else:
-            if opts.dense:
-                n_dense = 0 if region is None else len(region)
-                note = f"dense stereo gave {n_dense} points in its outline, keypoints used"
-            result_obj = make_object(name, kp, up, source="keypoints", **obj_opts)
-        if isinstance(result_obj, Skipped):
-            reason = result_obj.reason
-            if not len(kp):
-                reason = (
-                    "recognised in the left image, but none of its keypoints was matched "
-                    "in the right image"
-                )
-            skipped.append(Skipped(name, f"{reason}; {note}" if note else reason))
-        else:
-            if note:
-                result_obj = _with_note(result_obj, note)
-            objects.append(result_obj)
-    if opts.unknown:
-        free = ~claimed
-        extra, extra_skipped = build_objects(
-            np.asarray(points.xyz)[free],
-            [None] * int(free.sum()),
-            up,
-            unknown=True,
-            unknown_max_distance=opts.unknown_max_distance,
-            **obj_opts,
-        )
-        objects.extend(extra)
-        skipped.extend(extra_skipped)
-    return tuple(objects), skipped
-
-
-def _use_geometry(opts: PipelineOptions, result: Any) -> bool:
-    """Geometry first needs the dense map on the input grid (no resampling rectification)."""
-    dense = opts.dense and result.dense is not None
-    return bool(opts.geometry and dense and not result.rect.needs_resampling)
-
-
-def _geometry_objects(
-    shape: tuple[int, int],
-    result: Any,
-    labelling: Any,
-    opts: PipelineOptions,
-    id_to_label: dict[int, str] | None,
-) -> tuple[tuple[SceneObject, ...], list[Skipped]]:
-    """Geometry first (``perception.scene_regions``): named segments, votes, unknown segments."""
-    from scenespeak.perception.scene_regions import SceneInputs, objects_from_regions
-
-    xy = np.asarray(result.features_left.xy, dtype=np.float64)
-    up = np.asarray(result.rect.rig.up, dtype=np.float64)
-    inputs = SceneInputs(shape, result.dense, result.points, labelling, xy, up, id_to_label or {})
-    # the outlier radius is scaled to each object (objects.scaled_radius), not opts.radius
-    kw = {"outliers": opts.outliers, "eps": opts.eps, "min_points": opts.min_points}
-    objs, skipped, _geo = objects_from_regions(inputs, object_options=kw)
-    return tuple(objs), skipped
-
-
-def _visible_parts(
-    masks: Mapping[str, NDArray[np.bool_]], points: Any, labels_arr: NDArray[np.object_]
-) -> dict[str, NDArray[np.bool_]]:
-    """Each outline minus the outlines of recognised objects in front of it.
-
-    A carried outline covers the whole object, also where a nearer object hides it; those
-    pixels would give the nearer object's depth. Objects are ordered by the median disparity
-    of their labelled keypoints (larger is nearer); an object without keypoints keeps its
-    outline whole.
-    """
-    disparity = np.asarray(points.disparity, dtype=np.float64)
-    near = {
-        name: float(np.median(disparity[labels_arr == name]))
-        for name in masks
-        if np.any(labels_arr == name)
-    }
-    out: dict[str, NDArray[np.bool_]] = {}
-    for name, mask in masks.items():
-        visible = mask.copy()
-        if name in near:
-            for other, d in near.items():
-                if other != name and d > near[name]:
-                    visible &= ~masks[other]
-        out[name] = visible
-    return out
-
-
-def _with_note(obj: SceneObject, note: str) -> SceneObject:
-    from dataclasses import replace
-
-    return replace(obj, notes=(*obj.notes, note))
-
-
-def _dense_regions(
-    left: NDArray[np.generic],
-    right: NDArray[np.generic],
-    result: Any,
-    masks: Mapping[str, NDArray[np.bool_]],
-    max_points: int,
-) -> dict[str, NDArray[np.float64]]:
-    """3-D points of each recognised object's outline from dense stereo.
-
-    At most ``max_points`` per object (an even random sample: enough for outlier removal and
-    the hull). The stereo stage's own SGBM map (computed once per pair to verify the matches)
-    is reused; without one, SGBM runs once over the bounding box of all outlines and the
-    disparity range of the keypoints.
-    """
-    from scenespeak.perception import stereo
-
-    if not masks:
-        return {}
-    dense = result.dense
-    if dense is None:
-        union = np.logical_or.reduce(list(masks.values()))
-        if not union.any():
-            return {}
-        ys, xs = np.nonzero(union)
-        roi: tuple[int, int, int, int] | None = (
-            int(xs.min()),
-            int(ys.min()),
-            int(xs.max()) + 1,
-            int(ys.max()) + 1,
-        )
-        if result.rect.needs_resampling:
-            roi = None  # the outline is in input pixels; the map is rectified
-        dense = stereo.dense_disparity(
-            left, right, result.rect, keypoint_disparities=result.points.disparity, roi=roi
-        )
-    out: dict[str, NDArray[np.float64]] = {}
-    for name, m in masks.items():
-        xyz, _ = stereo.region_points(dense, m, max_points=max_points)
-        out[name] = np.asarray(xyz, dtype=np.float64).reshape(-1, 3)
-    return out
 
 
 # --------------------------------------------------------------------------------------------

@@ -37,8 +37,6 @@ KNOWN: dict[tuple[str, str, str], int] = {
     # not split yet (see the note of issue 9)
     ("lines", "perception/stereo.py", ""): 1063,
     ("lines", "perception/calibration.py", ""): 900,
-    ("lines", "perception/objects.py", ""): 734,
-    ("lines", "pipeline.py", ""): 829,
     ("lines", "tools/figures.py", ""): 970,
     ("lines", "tools/evaluation.py", ""): 788,
     ("lines", "perception/recognition/store.py", ""): 610,
@@ -51,10 +49,7 @@ KNOWN: dict[tuple[str, str, str], int] = {
     ("parameters", "perception/stereo.py", "dense_disparity"): 10,
     ("parameters", "perception/stereo.py", "_global_block"): 9,
     ("parameters", "perception/stereo.py", "_select"): 9,
-    ("parameters", "perception/objects.py", "make_object"): 12,
-    ("parameters", "perception/objects.py", "build_objects"): 9,
     ("parameters", "perception/recognition/ivf.py", "_build"): 10,
-    ("parameters", "pipeline.py", "_after_stereo"): 11,
     ("parameters", "tools/figures.py", "plot_matches"): 10,
     ("parameters", "tools/figures.py", "plot_points_3d"): 9,
     # landed by other issues during this session (after the limits test): to split
