@@ -141,6 +141,22 @@ class RGBDStreamFrame:
         }
 
 
+def _checked_masks(masks: NDArray[np.integer[Any]], depth: NDArray[np.float32]) -> NDArray[Any]:
+    """The instance image, refused (one line) when it is not of the depth's size or not of
+    instance numbers."""
+    from scenespeak.errors import ImageError
+
+    m = np.asarray(masks)
+    if m.shape != depth.shape:
+        mh, mw = (*m.shape, 0, 0)[:2]
+        raise ImageError(
+            "masks", f"are {mw}x{mh} but the depth image is {depth.shape[1]}x{depth.shape[0]}"
+        )
+    if m.dtype.kind not in "iu" or (m.dtype.kind == "i" and m.size and int(m.min()) < 0):
+        raise ImageError("masks", "must hold instance numbers 0 (background) or more")
+    return m
+
+
 def _box(m: MeasuredObject, width: int) -> tuple[int, int, int, int]:
     if m.kept is None or len(m.kept) == 0:
         return (0, 0, 0, 0)
@@ -248,12 +264,7 @@ class RGBDStream:
                 raise InputError("masks", "this frame has no masks and the stream has no --db")
             found = describe_rgbd(color, d, self.cam, db=self.db, options=o, summary=False)
             return list(found.objects), found.up_source, {"objects": time.perf_counter() - t0}
-        m = np.asarray(masks)
-        if m.shape != d.shape:
-            mh, mw = (*m.shape, 0, 0)[:2]
-            raise ImageError("masks", f"are {mw}x{mh} but the depth image is {size[0]}x{size[1]}")
-        if m.dtype.kind not in "iu" or (m.dtype.kind == "i" and m.size and int(m.min()) < 0):
-            raise ImageError("masks", "must hold instance numbers 0 (background) or more")
+        m = _checked_masks(masks, d)
         counts = np.bincount(m.ravel().astype(np.intp, copy=False))
         present = set(np.flatnonzero(counts).tolist()) - {0}
         exclude = None if self.cam.up is not None else m > 0  # the plane is sought off the objects
