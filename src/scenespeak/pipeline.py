@@ -460,6 +460,28 @@ def _after_stereo(
     )
 
 
+#: The keyframes' options of a stream (``keyframe_describer``): the CLI's, without unknown
+#: objects (clusters of unlabelled points are not stable enough to keep an id) or a summary.
+KEYFRAME_OPTIONS = PipelineOptions(unknown=False, summary=False)
+
+
+def keyframe_describer(
+    rig: Any, db: Any, options: PipelineOptions | None = None
+) -> Callable[[NDArray[np.generic], NDArray[np.generic]], SceneDescription]:
+    """``describe(left, right)``: :func:`describe_scene` with this rig, database and options.
+
+    What :class:`scenespeak.perception.tracking.ObjectTracker` runs on its keyframes (the
+    stream composes the pipeline and the tracker, so perception never imports the pipeline).
+    ``options`` defaults to :data:`KEYFRAME_OPTIONS`.
+    """
+    opts = options or KEYFRAME_OPTIONS
+
+    def describe(left: NDArray[np.generic], right: NDArray[np.generic]) -> SceneDescription:
+        return describe_scene(left, right, rig, db, options=opts)
+
+    return describe
+
+
 # --------------------------------------------------------------------------------------------
 # files
 

@@ -110,9 +110,10 @@ class SceneStream:
 
     def __init__(self, rig: Any, db: Any, options: StreamOptions | None = None) -> None:
         self.options = options or StreamOptions()
-        self.tracker = ObjectTracker(
-            rig, db, self.options.tracking, pipeline_options=self.options.pipeline
-        )
+        from scenespeak.pipeline import keyframe_describer
+
+        describe = keyframe_describer(rig, db, self.options.pipeline)
+        self.tracker = ObjectTracker(rig, describe, self.options.tracking)
         self.memory = WorkingMemory(self.options.memory)
         self._count = 0
 

@@ -1,12 +1,13 @@
 """Objects followed from frame to frame of a stereo stream, with a stable id each.
 
-The full chain (:func:`scenespeak.pipeline.describe_scene`: SIFT, labelling, stereo, dense
-regions) runs on a *keyframe*; between keyframes each object is *tracked*: its points in the
-left image are followed by pyramidal Lucas–Kanade optical flow (Bouguet 2000, OpenCV
-``calcOpticalFlowPyrLK``) with a forward–backward check (Kalal et al. 2010), found again in the
-right image by the same flow started at the previous disparity, triangulated, and the object's
-keyframe points are moved by the median 3-D displacement of its tracked points. Labels are
-carried by the tracks; recognition runs again when
+The full chain (a ``describe(left, right)`` function given to the tracker: the pipeline's
+:func:`scenespeak.pipeline.keyframe_describer`, i.e. ``describe_scene`` with SIFT, labelling,
+stereo and dense regions) runs on a *keyframe*; between keyframes each object is *tracked*: its
+points in the left image are followed by pyramidal Lucas–Kanade optical flow (Bouguet 2000,
+OpenCV ``calcOpticalFlowPyrLK``) with a forward–backward check (Kalal et al. 2010), found again
+in the right image by the same flow started at the previous disparity, triangulated, and the
+object's keyframe points are moved by the median 3-D displacement of its tracked points. Labels
+are carried by the tracks; recognition runs again when
 
 - ``keyframe_every`` frames have passed since the last keyframe,
 - a track lost too many points (the object moved out of sight, behind another, or too fast),
@@ -19,200 +20,40 @@ A track that is not seen keeps its last position, with a guess of why it is not 
 (``"out of view"`` when its last image box leaves the image, else ``"hidden"``, with the
 id of the nearer object covering it most). When the camera turns, the unseen tracks turn with
 it. Only perception is
-here; the words, their smoothing and the events are :mod:`scenespeak.spatial.memory`.
+here (the records are in :mod:`scenespeak.perception.tracks`); the words, their smoothing and
+the events are :mod:`scenespeak.spatial.memory`; :mod:`scenespeak.live.stream` joins them.
 """
 
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field, replace
-from typing import Any, Literal
+from collections.abc import Callable
+from dataclasses import replace
 
 import cv2
 import numpy as np
 from numpy.typing import NDArray
 
+from scenespeak.perception.calibration import StereoRig
 from scenespeak.perception.objects import SceneObject, project_to_plane
+from scenespeak.perception.stereo import Points3D
+from scenespeak.perception.tracks import (
+    FrameObjects,
+    Keyframe,
+    Track,
+    TrackingOptions,
+    Where,
+    _box,
+    _gray,
+    _hue_hist,
+    _moved_object,
+    _State,
+)
 
-__all__ = ["FrameObjects", "ObjectTracker", "Track", "TrackingOptions"]
+__all__ = ["Describe", "FrameObjects", "ObjectTracker", "Track", "TrackingOptions", "Where"]
 
-Where = Literal["seen", "hidden", "out of view"]
-
-
-@dataclass(frozen=True)
-class TrackingOptions:
-    """Knobs of :class:`ObjectTracker`.
-
-    Attributes
-    ----------
-    keyframe_every : int
-        Full recognition at least every this many frames.
-    min_survival : float
-        A track needs this share of its keyframe points still tracked.
-    min_points : int
-        ... and at least this many.
-    corners : int
-        Shi–Tomasi corners added inside each object's outline at a keyframe (besides its
-        labelled SIFT keypoints).
-    window : int
-        Lucas–Kanade window (pixels).
-    max_fb_error : float
-        Forward–backward error (pixels) above which a tracked point is dropped.
-    max_row_error : float
-        Rectified row difference (pixels) above which a left/right pair is dropped.
-    depth_gate : float
-        Points farther than this (metres) from their track's median depth are dropped (they
-        slid onto an object in front or behind).
-    match_distance : float
-        A keyframe object further than this (metres) from a track's predicted position is not
-        that track.
-    change_fraction, change_level : float, int
-        Recognise again when more than ``change_fraction`` of the pixels outside the tracked
-        boxes differ by more than ``change_level`` grey levels from the last keyframe.
-    """
-
-    keyframe_every: int = 10
-    min_survival: float = 0.4
-    min_points: int = 5
-    corners: int = 40
-    window: int = 21
-    max_fb_error: float = 1.0
-    max_row_error: float = 2.0
-    depth_gate: float = 0.15
-    match_distance: float = 0.3
-    change_fraction: float = 0.004
-    change_level: int = 30
-
-
-@dataclass(frozen=True, eq=False)
-class Track:
-    """One object as the tracker knows it in the current frame.
-
-    Attributes
-    ----------
-    id : int
-        Stable over the stream (never reused).
-    label : str
-        The database label (carried from the keyframe that recognised it).
-    obj : SceneObject
-        Its points, hull and heights, moved to the current frame (the last known ones when
-        it is not seen).
-    where : {"seen", "hidden", "out of view"}
-        Seen this frame, or the tracker's guess of why not.
-    behind : int or None
-        For ``"hidden"``: the id of the nearer track covering it.
-    box : (x0, y0, x1, y1) float
-        Its box in the left image (input pixels).
-    outline : (M, 2) float
-        Its outline in the left image (the recognised outline moved with the track).
-    source : {"recognised", "tracked", "remembered"}
-        How this frame's position was obtained.
-    last_seen : int
-        The frame it was last seen in.
-    tracked_points : int
-        Points followed this frame.
-    """
-
-    id: int
-    label: str
-    obj: SceneObject
-    where: Where
-    box: tuple[float, float, float, float]
-    outline: NDArray[np.float64]
-    source: str
-    last_seen: int
-    behind: int | None = None
-    tracked_points: int = 0
-
-
-@dataclass(frozen=True, eq=False)
-class FrameObjects:
-    """What the tracker made of one frame.
-
-    Attributes
-    ----------
-    index : int
-        Frame number (from 0).
-    tracks : tuple of Track
-        Every track alive (seen or remembered).
-    recognised : bool
-        Whether the full chain ran on this frame.
-    reason : str
-        Why it ran (``"first frame"``, ``"every 10 frames"``, ``"track lost"``, ``"scene
-        changed"``), ``""`` when it did not.
-    description : SceneDescription or None
-        The full chain's result on a recognised frame.
-    timings : dict of str to float
-        Seconds: ``track``, ``recognise``, ``match``.
-    """
-
-    index: int
-    tracks: tuple[Track, ...]
-    recognised: bool
-    reason: str
-    description: Any = None
-    timings: dict[str, float] = field(default_factory=dict)
-
-
-@dataclass
-class _State:
-    """Mutable per-track state between frames (private to the tracker)."""
-
-    track: Track
-    key_obj: SceneObject
-    key_xyz: NDArray[np.float64]  # tracked points' 3-D at the keyframe
-    left_xy: NDArray[np.float32]  # their current left positions
-    right_xy: NDArray[np.float32]
-    n_key: int
-    key_outline: NDArray[np.float64]
-    key_left: NDArray[np.float32]  # their left positions at the keyframe
-    hist: NDArray[np.float32]
-    alive: NDArray[np.bool_] = field(default_factory=lambda: np.zeros(0, bool))
-
-
-def _gray(img: NDArray[np.generic]) -> NDArray[np.uint8]:
-    a = np.asarray(img)
-    if a.dtype != np.uint8:
-        f = a.astype(np.float64)
-        lo, hi = float(np.nanmin(f)), float(np.nanmax(f))
-        a = np.round((f - lo) * (255.0 / max(hi - lo, 1e-12))).astype(np.uint8)
-    if a.ndim == 3:
-        return np.ascontiguousarray(cv2.cvtColor(a, cv2.COLOR_RGB2GRAY), dtype=np.uint8)
-    return np.ascontiguousarray(a, dtype=np.uint8)
-
-
-def _hue_hist(img: NDArray[np.generic], mask: NDArray[np.uint8]) -> NDArray[np.float32]:
-    a = np.asarray(img)
-    if a.ndim != 3:
-        h = cv2.calcHist([np.ascontiguousarray(a, dtype=np.uint8)], [0], mask, [16], [0, 256])
-    else:
-        hsv = cv2.cvtColor(np.ascontiguousarray(a[..., :3], dtype=np.uint8), cv2.COLOR_RGB2HSV)
-        h = cv2.calcHist([hsv], [0, 1], mask, [12, 4], [0, 180, 0, 256])
-    h = np.asarray(h, dtype=np.float32)
-    return (h / max(float(h.sum()), 1e-12)).astype(np.float32)
-
-
-def _box(xy: NDArray[np.float64]) -> tuple[float, float, float, float]:
-    return (
-        float(xy[:, 0].min()),
-        float(xy[:, 1].min()),
-        float(xy[:, 0].max()),
-        float(xy[:, 1].max()),
-    )
-
-
-def _moved_object(obj: SceneObject, t: NDArray[np.float64], up: NDArray[np.float64]) -> SceneObject:
-    """``obj`` translated by the 3-D vector ``t`` (left camera frame)."""
-    dxy = project_to_plane(t[None], up)[0]
-    u = up / np.linalg.norm(up)
-    return replace(
-        obj,
-        xyz=obj.xyz + t,
-        plane_xy=obj.plane_xy + dxy,
-        hull=obj.hull + dxy,
-        centroid=obj.centroid + t,
-        heights=obj.heights + float(t @ u),
-    )
+#: The full chain on one stereo pair (left, right) → its keyframe result.
+Describe = Callable[[NDArray[np.generic], NDArray[np.generic]], Keyframe]
 
 
 class ObjectTracker:
@@ -222,28 +63,22 @@ class ObjectTracker:
     ----------
     rig : StereoRig
         The calibration of every frame.
-    db : ObjectDatabase
-        The object database (used from the thread that calls :meth:`update`).
+    describe : callable
+        ``describe(left, right)``: the full chain on a keyframe (called from the thread that
+        calls :meth:`update`); :func:`scenespeak.pipeline.keyframe_describer` makes the
+        pipeline's (the CLI's options without unknown objects: clusters of unlabelled points
+        are not stable enough to keep an id).
     options : TrackingOptions, optional
-    pipeline_options : PipelineOptions, optional
-        For the keyframes' full chain (default: the CLI's, without unknown objects: clusters
-        of unlabelled points are not stable enough to keep an id).
     """
 
     def __init__(
-        self,
-        rig: Any,
-        db: Any,
-        options: TrackingOptions | None = None,
-        pipeline_options: Any = None,
+        self, rig: StereoRig, describe: Describe, options: TrackingOptions | None = None
     ) -> None:
         from scenespeak.perception.calibration import rectify
-        from scenespeak.pipeline import PipelineOptions
 
         self.rig = rig
-        self.db = db
+        self.describe = describe
         self.options = options or TrackingOptions()
-        self.pipeline_options = pipeline_options or PipelineOptions(unknown=False, summary=False)
         self.rect = rectify(rig)
         self.up = np.asarray(rig.up, dtype=np.float64)
         self._states: dict[int, _State] = {}
@@ -281,11 +116,7 @@ class ObjectTracker:
         description = None
         if reason:
             t0 = time.perf_counter()
-            from scenespeak.pipeline import describe_scene
-
-            description = describe_scene(
-                left, right, self.rig, self.db, options=self.pipeline_options
-            )
+            description = self.describe(left, right)
             timings["recognise"] = time.perf_counter() - t0
             t0 = time.perf_counter()
             self._recognised(description, left, gl, gr, k)
@@ -469,39 +300,16 @@ class ObjectTracker:
     # ---------------------------------------------------------------------------------------
     def _recognised(
         self,
-        description: Any,
+        description: Keyframe,
         color: NDArray[np.generic],
         gl: NDArray[np.uint8],
         gr: NDArray[np.uint8],
         k: int,
     ) -> None:
         """Match a keyframe's objects to the tracks and seed their points afresh."""
-        from scipy.optimize import linear_sum_assignment
-
-        opts = self.options
-        outlines = {d.label: np.asarray(d.outline_in_scene, float) for d in description.detections}
-        objs = [o for o in description.objects if o.label in outlines]
-        h, w = gl.shape
-        masks = []
-        for o in objs:
-            m = np.zeros((h, w), np.uint8)
-            cv2.fillPoly(m, [np.round(outlines[o.label]).astype(np.int32).reshape(-1, 1, 2)], 1)
-            masks.append(m)
-        hists = [_hue_hist(color, m) for m in masks]
+        objs, outlines, masks, hists = _keyframe_objects(description, color, gl.shape)
         states = list(self._states.values())
-        cost = np.full((len(objs), len(states)), 1e6)
-        for i, o in enumerate(objs):
-            for j, s in enumerate(states):
-                if s.track.label != o.label:
-                    continue
-                d = float(np.linalg.norm(o.centroid - s.track.obj.centroid))
-                limit = opts.match_distance * (1.0 if s.track.where == "seen" else 2.0)
-                if d > limit:
-                    continue
-                app = float(cv2.compareHist(hists[i], s.hist, cv2.HISTCMP_BHATTACHARYYA))
-                cost[i, j] = d / limit + 0.5 * app
-        rows, cols = linear_sum_assignment(cost) if objs and states else ((), ())
-        matched = {int(r): int(c) for r, c in zip(rows, cols, strict=True) if cost[r, c] < 1e5}
+        matched = _assign(objs, hists, states, self.options.match_distance)
         pts = description.points
         labels = np.array(["" if v is None else v for v in description.point_labels], dtype=object)
         for i, o in enumerate(objs):
@@ -510,25 +318,8 @@ class ObjectTracker:
             else:
                 tid, self._next_id = self._next_id, self._next_id + 1
             seeded = self._seed(o, masks[i], pts, labels, gl, gr)
-            if seeded is None:
-                continue
-            lxy, rxy, xyz = seeded
-            outline = outlines[o.label]
-            track = Track(
-                tid, o.label, o, "seen", _box(outline), outline, "recognised", k, None, len(xyz)
-            )
-            self._states[tid] = _State(
-                track,
-                o,
-                xyz,
-                lxy,
-                rxy,
-                len(xyz),
-                outline,
-                lxy.copy(),
-                hists[i],
-                np.ones(len(xyz), bool),
-            )
+            if seeded is not None:
+                self._states[tid] = _new_state(tid, o, outlines[o.label], seeded, hists[i], k)
         matched_ids = {states[c].track.id for c in matched.values()}
         for s in states:
             if s.track.id not in matched_ids and s.track.last_seen != k:
@@ -538,7 +329,7 @@ class ObjectTracker:
         self,
         o: SceneObject,
         mask: NDArray[np.uint8],
-        pts: Any,
+        pts: Points3D,
         labels: NDArray[np.object_],
         gl: NDArray[np.uint8],
         gr: NDArray[np.uint8],
@@ -600,3 +391,63 @@ class ObjectTracker:
                 s.track = replace(t, where="out of view", behind=None)
             else:
                 s.track = replace(t, where="hidden", behind=cover)
+
+
+def _keyframe_objects(
+    description: Keyframe, color: NDArray[np.generic], shape: tuple[int, ...]
+) -> tuple[
+    list[SceneObject],
+    dict[str, NDArray[np.float64]],
+    list[NDArray[np.uint8]],
+    list[NDArray[np.float32]],
+]:
+    """A keyframe's recognised objects with their outlines, outline masks and hue histograms."""
+    outlines = {d.label: np.asarray(d.outline_in_scene, float) for d in description.detections}
+    objs = [o for o in description.objects if o.label in outlines]
+    masks = []
+    for o in objs:
+        m = np.zeros(shape[:2], np.uint8)
+        cv2.fillPoly(m, [np.round(outlines[o.label]).astype(np.int32).reshape(-1, 1, 2)], 1)
+        masks.append(m)
+    return objs, outlines, masks, [_hue_hist(color, m) for m in masks]
+
+
+def _assign(
+    objs: list[SceneObject],
+    hists: list[NDArray[np.float32]],
+    states: list[_State],
+    match_distance: float,
+) -> dict[int, int]:
+    """Keyframe object index → state index: same label, near the track's position (twice as far
+    for an unseen one), similar hue; Hungarian assignment (``linear_sum_assignment``)."""
+    from scipy.optimize import linear_sum_assignment
+
+    cost = np.full((len(objs), len(states)), 1e6)
+    for i, o in enumerate(objs):
+        for j, s in enumerate(states):
+            if s.track.label != o.label:
+                continue
+            d = float(np.linalg.norm(o.centroid - s.track.obj.centroid))
+            limit = match_distance * (1.0 if s.track.where == "seen" else 2.0)
+            if d > limit:
+                continue
+            app = float(cv2.compareHist(hists[i], s.hist, cv2.HISTCMP_BHATTACHARYYA))
+            cost[i, j] = d / limit + 0.5 * app
+    rows, cols = linear_sum_assignment(cost) if objs and states else ((), ())
+    return {int(r): int(c) for r, c in zip(rows, cols, strict=True) if cost[r, c] < 1e5}
+
+
+def _new_state(
+    tid: int,
+    o: SceneObject,
+    outline: NDArray[np.float64],
+    seeded: tuple[NDArray[np.float32], NDArray[np.float32], NDArray[np.float64]],
+    hist: NDArray[np.float32],
+    k: int,
+) -> _State:
+    """A track's state as a keyframe recognised it (its points seeded afresh)."""
+    lxy, rxy, xyz = seeded
+    track = Track(tid, o.label, o, "seen", _box(outline), outline, "recognised", k, None, len(xyz))
+    return _State(
+        track, o, xyz, lxy, rxy, len(xyz), outline, lxy.copy(), hist, np.ones(len(xyz), bool)
+    )
