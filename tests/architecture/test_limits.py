@@ -37,11 +37,8 @@ KNOWN: dict[tuple[str, str, str], int] = {
     # not split yet (see the note of issue 9)
     ("lines", "perception/stereo.py", ""): 1063,
     ("lines", "perception/calibration.py", ""): 900,
-    ("lines", "tools/figures.py", ""): 970,
     ("lines", "tools/evaluation.py", ""): 788,
     ("lines", "perception/recognition/store.py", ""): 610,
-    ("complexity", "tools/figures.py", "_scene_view"): 51,
-    ("complexity", "tools/figures.py", "plot_hulls"): 19,
     ("complexity", "tools/evaluation.py", "score_scene"): 17,
     ("complexity", "spatial/naming.py", "instance_names"): 16,
     ("parameters", "perception/stereo.py", "stereo_points"): 16,
@@ -50,8 +47,8 @@ KNOWN: dict[tuple[str, str, str], int] = {
     ("parameters", "perception/stereo.py", "_global_block"): 9,
     ("parameters", "perception/stereo.py", "_select"): 9,
     ("parameters", "perception/recognition/ivf.py", "_build"): 10,
-    ("parameters", "tools/figures.py", "plot_matches"): 10,
-    ("parameters", "tools/figures.py", "plot_points_3d"): 9,
+    ("parameters", "tools/figures/plots.py", "plot_matches"): 10,
+    ("parameters", "tools/figures/plots.py", "plot_points_3d"): 9,
     # landed by other issues during this session (after the limits test): to split
     ("complexity", "cli/watch.py", "_source"): 16,
     ("complexity", "inputs.py", "SceneInputs.check"): 19,
