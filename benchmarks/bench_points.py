@@ -1,28 +1,36 @@
 """Benchmark of ``scenespeak points``' stereo stage against SIFT alone.
 
-For a real pair (MiddEval2 "Art", or ``--pair LEFT RIGHT``) resized to 640×480, 1280×960 and
-1920×1080, prints median wall-clock times, interleaved in one run, of:
+For a real pair (MiddEval2 "Art", or ``--pair LEFT RIGHT``, e.g. a generated scene's
+``left.png right.png``) resized to 640×480, 1280×960 and 1920×1080, read in colour as the
+command reads them, prints median wall-clock and process-CPU times, interleaved in one run, of:
 
 * SIFT of both images, one after the other (the floor the target is set against: ``points``
   must take at most this + 25 %);
 * the command's stage today (``cli.points._stereo_points``: SIFT of both images in two
-  threads, the dense check cropped to the matches plus 16 px);
-* the stage as it was (``stereo.stereo_points`` over the whole image, SIFT one after the other);
+  threads, the dense check over the whole image);
+* the plain stage (``stereo.stereo_points`` over the whole image, SIFT one after the other:
+  the points the command must give);
+* the stage with the dense check cropped to the matches plus 16 px, as ``describe`` runs it
+  (``PipelineOptions.dense_crop``; threaded SIFT), to show what the crop would save and how
+  many points it changes;
 
-and checks that the two give the same points. Images are decoded before timing.
+and checks that the command gives the same points as the plain stage. Images are decoded
+before timing.
 
 Run::
 
-    python benchmarks/bench_points.py [--repeat 5] [--pair LEFT RIGHT]
+    python benchmarks/bench_points.py [--repeat 5] [--pair LEFT RIGHT] [--sizes 640x480 ...]
 """
 
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import statistics
 import time
 from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 from typing import Any
 
@@ -35,56 +43,91 @@ from scenespeak.perception.features import detect, load_image, to_gray
 ART = Path(__file__).resolve().parents[1] / "../shared/data/real/stereo/middeval2/Art"
 
 
-def median_s(fn: Callable[[], object], repeat: int) -> list[float]:
-    times = []
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return times
+def timed(fn: Callable[[], object]) -> tuple[float, float]:
+    """(wall, process CPU) seconds of one call."""
+    t0, c0 = time.perf_counter(), time.process_time()
+    fn()
+    return time.perf_counter() - t0, time.process_time() - c0
+
+
+def _size(text: str) -> tuple[int, int]:
+    w, h = text.lower().split("x")
+    return int(w), int(h)
+
+
+def _crop16(left: Any, right: Any, rig: Any) -> Any:
+    """describe's stereo stage: threaded SIFT, dense check cropped to the matches + 16 px."""
+    with ThreadPoolExecutor(max_workers=1) as pool:
+        future = pool.submit(detect, to_gray(right), precise_upscale=False)
+        fl = detect(to_gray(left), precise_upscale=False)
+        fr = future.result()
+    return stereo.stereo_points(
+        left, right, rig, features_left=fl, features_right=fr, dense_crop=True, dense_margin=16
+    ).points
+
+
+def _same(a: Any, b: Any) -> str:
+    pa, pb = stereo.points_to_json(a)["points"], stereo.points_to_json(b)["points"]
+    if pa == pb:
+        return "yes"
+    sa, sb = ({json.dumps(p) for p in x} for x in (pa, pb))
+    return f"NO (+{len(sa - sb)} -{len(sb - sa)})"
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeat", type=int, default=5)
     parser.add_argument("--pair", nargs=2, type=Path, metavar=("LEFT", "RIGHT"))
+    parser.add_argument(
+        "--sizes", nargs="+", type=_size, default=[(640, 480), (1280, 960), (1920, 1080)]
+    )
     args = parser.parse_args()
     left_path, right_path = args.pair or (ART / "view1.png", ART / "view5.png")
-    left0, right0 = load_image(left_path), load_image(right_path)
+    left0, right0 = load_image(left_path, gray=False), load_image(right_path, gray=False)
     print(f"load average before: {' '.join(f'{x:.2f}' for x in os.getloadavg())}")
-    print(f"pair: {left_path.name} / {right_path.name}, resized\n")
-    print("| size | SIFT both (s) | points now (s) | now / SIFT | before (s) | same points |")
-    print("| --- | ---: | ---: | ---: | ---: | --- |")
+    print(f"pair: {left_path} / {right_path}, resized; wall (CPU) medians, s\n")
+    print(
+        "| size | SIFT both | points now | now / SIFT | plain stage | cropped 16 px | "
+        "same points (now) | cropped: same points |"
+    )
+    print("| --- | ---: | ---: | ---: | ---: | ---: | --- | --- |")
     names = (Path("left"), Path("right"))
-    for size in ((640, 480), (1280, 960), (1920, 1080)):
-        left = cv2.resize(left0, size, interpolation=cv2.INTER_AREA)
-        right = cv2.resize(right0, size, interpolation=cv2.INTER_AREA)
+    for size in args.sizes:
+        interp = cv2.INTER_AREA if size[0] < left0.shape[1] else cv2.INTER_LINEAR
+        left = cv2.resize(left0, size, interpolation=interp)
+        right = cv2.resize(right0, size, interpolation=interp)
         rig = calibration.rig_from_short(0.16, 60.0, size)
 
-        def sift(left=left, right=right) -> object:
+        def sift(left: Any = left, right: Any = right) -> object:
             return detect(to_gray(left), precise_upscale=False), detect(
                 to_gray(right), precise_upscale=False
             )
 
-        def now(left=left, right=right, rig=rig) -> Any:
+        def now(left: Any = left, right: Any = right, rig: Any = rig) -> Any:
             return _stereo_points(stereo, left, right, rig, ratio=0.6, sources=names)
 
-        def before(left=left, right=right, rig=rig) -> Any:
+        def plain(left: Any = left, right: Any = right, rig: Any = rig) -> Any:
             return stereo.stereo_points(left, right, rig, ratio=0.6).points
 
-        t_sift: list[float] = []
-        t_now: list[float] = []
-        t_before: list[float] = []
-        for _ in range(args.repeat):  # interleaved: the three share the machine's load
-            t_sift += median_s(sift, 1)
-            t_now += median_s(now, 1)
-            t_before += median_s(before, 1)
-        a, b = now(), before()
-        same = stereo.points_to_json(a) == stereo.points_to_json(b)
-        s, n, o = (statistics.median(t) for t in (t_sift, t_now, t_before))
+        def crop(left: Any = left, right: Any = right, rig: Any = rig) -> Any:
+            return _crop16(left, right, rig)
+
+        cases = {"sift": sift, "now": now, "plain": plain, "crop": crop}
+        times: dict[str, list[tuple[float, float]]] = {k: [] for k in cases}
+        for _ in range(args.repeat):  # interleaved: they share the machine's load
+            for k, fn in cases.items():
+                times[k].append(timed(fn))
+        med = {
+            k: (statistics.median(w for w, _ in t), statistics.median(c for _, c in t))
+            for k, t in times.items()
+        }
+        a, b, c = now(), plain(), crop()
+        cell = {k: f"{w:.3f} ({c_:.3f})" for k, (w, c_) in med.items()}
+        ratio = f"{med['now'][0] / med['sift'][0]:.2f} ({med['now'][1] / med['sift'][1]:.2f})"
         print(
-            f"| {size[0]}×{size[1]} | {s:.3f} | {n:.3f} | {n / s:.2f} | {o:.3f} | "
-            f"{'yes' if same else 'NO'} ({len(a.xyz)} points) |"
+            f"| {size[0]}×{size[1]} | {cell['sift']} | {cell['now']} | {ratio} | "
+            f"{cell['plain']} | {cell['crop']} | {_same(a, b)} ({len(a.xyz)} points) | "
+            f"{_same(c, b)} |"
         )
     print(f"\nload average after: {' '.join(f'{x:.2f}' for x in os.getloadavg())}")
 

@@ -58,8 +58,9 @@ def points_cmd(
     )
     if swap:
         left, right = right, left
-    left_img = load_image(left)
-    right_img = load_image(right)
+    # colour, as describe reads them (one path: SIFT and SGBM see the same gray conversion)
+    left_img = load_image(left, gray=False)
+    right_img = load_image(right, gray=False)
     with _status("matching the stereo pair", quiet):
         plausibility.check_pair_order(left_img, right_img, rig, names=(str(left), str(right)))
         points = _stereo_points(
@@ -83,21 +84,19 @@ def points_cmd(
         _write_text(out, text + "\n")
 
 
-#: Pixels around the matches' box that the dense check covers (the pipeline's
-#: ``PipelineOptions.dense_margin``).
-DENSE_MARGIN = 16
-
-
 def _stereo_points(
     stereo: Any, left: Any, right: Any, rig: Any, *, ratio: float, sources: tuple[Path, Path]
 ) -> Any:
-    """The pipeline's stereo stage: SIFT of both images at once, the dense check cropped.
+    """The stereo stage with SIFT of both images at once; the dense check over the whole image.
 
     OpenCV releases the GIL in SIFT, so the right image's extraction runs in a second thread
-    while this one does the left's; the dense SGBM check covers only the matches' bounding box
-    plus :data:`DENSE_MARGIN` pixels (``stereo_points(dense_crop=True)``) instead of the whole
-    image. The points are those of the plain ``stereo_points(left, right, rig)``
-    (``tests/cli/test_points_fast.py``).
+    while this one does the left's: the points are those of the plain
+    ``stereo_points(left, right, rig)`` by construction (``tests/cli/test_points_fast.py``).
+    The dense SGBM check is NOT cropped to the matches as ``describe`` crops it
+    (``PipelineOptions.dense_crop``): SGBM's semi-global path costs carry influence along whole
+    rows and columns, so a cropped map differs from the whole image's in thousands of pixels at
+    any margin, and the matches it keeps in about one of seventy on rendered scenes, at 16 px
+    as at 150 px (``benchmarks/bench_points.py`` shows the time and the points of both).
     """
     from concurrent.futures import ThreadPoolExecutor
 
@@ -118,8 +117,7 @@ def _stereo_points(
         features_right=features_right,
         left_name=names[0],
         right_name=names[1],
-        dense_crop=True,
-        dense_margin=DENSE_MARGIN,
+        dense_crop=False,
         min_points=1,
     )
     return result.points
