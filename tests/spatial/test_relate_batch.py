@@ -374,3 +374,22 @@ def _decide_with_shares(  # type: ignore[no-untyped-def]
         )
     finally:
         rules._sector_share = original  # type: ignore[assignment]
+
+
+def test_scene_histogram_checks_match_as_histograms() -> None:
+    from scenespeak.spatial.language import scenepairs
+
+    rng = np.random.default_rng(5)
+    f0, f2 = rng.exponential(size=(2, 6, 36))
+    same = scenepairs._checked(f0, f2)
+    np.testing.assert_array_equal(same[0], f0)
+    np.testing.assert_array_equal(same[1], f2)
+    f2[3, 4] = -1e-14  # rounding below 0: clipped, as _as_histogram does
+    got = scenepairs._checked(f0, f2)
+    np.testing.assert_array_equal(got[1][3], rules._as_histogram(f2[3], "f2"))
+    assert got[1][3, 4] == 0.0 and got[1].min() >= 0.0
+    for bad, problem in ((-1.0, "negative"), (np.nan, "non-finite")):
+        f2[3, 4] = bad
+        with pytest.raises(InputError, match=problem) as err:
+            scenepairs._checked(f0, f2)
+        assert err.value.source == "f2"

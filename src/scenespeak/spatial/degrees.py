@@ -347,17 +347,29 @@ def four_direction_degrees(
     # deviation 0 (as direction_degree finds), so only the other (row, direction) are computed.
     degree = np.zeros((rows, 4))
     deviation = np.zeros((rows, 4))
-    run = np.zeros((rows, 2 * nbins + 1), dtype=np.intp)
-    np.cumsum(np.concatenate([h != 0.0, h != 0.0], axis=1), axis=1, out=run[:, 1:])
+    # Direction k's bins -(n-1) .. n-1 are quadrant k and quadrant k-1 but its first bin.
+    quadrants = (h != 0.0).reshape(rows, 4, n)
+    whole, inner = quadrants.any(axis=2), quadrants[:, :, 1:].any(axis=2)
     for k in range(4):
-        start = (k * n - (n - 1)) % nbins  # the bins -(n-1) .. n-1 around the direction
-        live = np.flatnonzero(run[:, start + 2 * n - 1] > run[:, start])
-        turn = (k * n + np.arange(nbins)) % nbins
+        live = np.flatnonzero(whole[:, k] | inner[:, (k - 1) % 4])
         for lo in range(0, live.size, DEGREE_BLOCK):
             at = live[lo : lo + DEGREE_BLOCK]
-            found = _turned_degrees(h[at[:, None], turn])
+            found = _block_degrees(h, at, k * n)
             degree[at, k], deviation[at, k] = found[0], found[1]
     return degree, deviation
+
+
+@functools.lru_cache(maxsize=32)
+def _turned_columns(nbins: int, shift: int) -> tuple[NDArray[np.intp], NDArray[np.intp], int]:
+    """The columns of :func:`_block_degrees` for the direction of bin ``shift``: the
+    favourable bins of both sides (positive side, then negative, each from the pivot inwards),
+    the contrary bins of both sides, and the opposite bin (read-only)."""
+    c = _constants(nbins)
+    fav = (shift + np.concatenate([c.phis, c.neg_phis])) % nbins
+    con = (shift + np.concatenate([c.cphi, c.neg_cphi])) % nbins
+    fav.setflags(write=False)
+    con.setflags(write=False)
+    return fav, con, (shift + nbins // 2) % nbins
 
 
 def _cancelled(
@@ -390,23 +402,32 @@ def _cancelled(
 
 def _turned_degrees(g: NDArray[np.float64]) -> NDArray[np.float64]:
     """``(4, R)``: degree, deviation, effective and contrary of bin 0's direction of each row
-    of ``g`` (C-contiguous, ``2 * N/4 - 1 <= 128``), the operations of :func:`direction_degree`."""
-    rows, nbins = g.shape
+    of ``g`` (``2 * N/4 - 1 <= 128``), the operations of :func:`direction_degree`."""
+    return _block_degrees(g, np.arange(len(g)), 0)
+
+
+def _block_degrees(h: NDArray[np.float64], at: NDArray[np.intp], shift: int) -> NDArray[np.float64]:
+    """``(4, len(at))``: degree, deviation, effective and contrary of the direction of bin
+    ``shift`` of the rows ``at`` of ``h`` (``2 * N/4 - 1 <= 128``): the operations of
+    :func:`direction_degree`, on all rows at once."""
+    nbins = h.shape[1]
     n = nbins // 4
+    rows = len(at)
     c = _constants(nbins)
-    # Every array is C-contiguous (np.take): NumPy sums a row of a C-ordered array in the same
-    # order as a 1-D array, but not always a row of an F-ordered one.
-    # Both sides stacked: rows 0..R-1 the positive side, R..2R-1 the negative side.
-    fav = np.concatenate([np.take(g, c.phis, axis=1), np.take(g, c.neg_phis, axis=1)])
+    fav_cols, con_cols, opposite_col = _turned_columns(nbins, shift)
+    # Both sides of each row, interleaved: row 2i is row i's positive side, 2i + 1 its
+    # negative side. Every array is C-contiguous: NumPy sums a row of a C-ordered array in
+    # the same order as a 1-D array, but not always a row of an F-ordered one.
+    fav = h[at[:, None], fav_cols].reshape(2 * rows, n)
     fav[:, -1] *= 0.5
-    con = np.concatenate([np.take(g, c.cphi, axis=1), np.take(g, c.neg_cphi, axis=1)])
-    opposite = 0.5 * g[:, 2 * n]
-    moment = _row_dots(con, c.arm) + np.concatenate([opposite, opposite]) * n
+    con = h[at[:, None], con_cols].reshape(2 * rows, n)
+    opposite = 0.5 * h[at, opposite_col]
+    moment = _row_dots(con, c.arm) + np.repeat(opposite, 2) * n
     con_sum = con.sum(axis=1)
-    contrary = (con_sum[:rows] + con_sum[rows:]) + 2.0 * opposite
+    contrary = (con_sum[0::2] + con_sum[1::2]) + 2.0 * opposite
     cancelled = _cancelled(fav, moment, c.dist)
-    contrary = (contrary + cancelled[:rows]) + cancelled[rows:]
-    fav_pos, fav_neg = fav[:rows], fav[rows:]
+    contrary = (contrary + cancelled[0::2]) + cancelled[1::2]
+    fav_pos, fav_neg = fav[0::2], fav[1::2]
     eff = np.concatenate(
         [fav_neg[:, :-1], fav_pos[:, -1:] + fav_neg[:, -1:], fav_pos[:, ::-1][:, 1:]], axis=1
     )
@@ -416,7 +437,12 @@ def _turned_degrees(g: NDArray[np.float64]) -> NDArray[np.float64]:
         tau = _row_dots(eff, c.weight) / c.weight_sum
         above = np.maximum(eff - tau[:, None], 0.0)
         mass = above.sum(axis=1)
-        theta = np.where(mass > 0.0, _row_dots(above, c.phi) / mass, _row_dots(eff, c.phi) / total)
+        if bool((mass > 0.0).all()):
+            theta = _row_dots(above, c.phi) / mass
+        else:
+            theta = np.where(
+                mass > 0.0, _row_dots(above, c.phi) / mass, _row_dots(eff, c.phi) / total
+            )
         degree = np.maximum(0.0, 1.0 - np.abs(theta) / (np.pi / 2.0)) * total / (total + contrary)
     zero = total <= 1e-12 * scale
     out = np.empty((4, rows))

@@ -79,8 +79,8 @@ def coverages(f0: NDArray[np.float64], t: Thresholds) -> NDArray[np.float64]:
     The smoothed F0 is taken as a difference of running sums, which rounds differently from
     :func:`~.rules._coverage`'s convolution by at most ``~1e-13`` of the row's mass; a bin is
     covered when its smoothed force reaches ``coverage_level`` of the largest. Wherever a bin
-    lies within ``1e-9`` of the mass of that level, so that the rounding could tell, the row
-    is computed by :func:`~.rules._coverage` itself, so the result is the reference's.
+    lies within ``1e-9`` of the row's mass of that level, so that the rounding could tell, the
+    row is computed by :func:`~.rules._coverage` itself, so the result is the reference's.
 
     Examples
     --------
@@ -90,29 +90,28 @@ def coverages(f0: NDArray[np.float64], t: Thresholds) -> NDArray[np.float64]:
     [0.15555555555555556, 1.0]
     """
     rows, nbins = f0.shape
-    out = np.zeros(rows)
     if rows == 0:
-        return out
+        return np.zeros(0)
     k = round(t.coverage_smooth_deg / (360.0 / nbins))
-    if k <= 0:
-        smooth = f0
-        exact = np.ones(rows, bool)
-    elif 2 * k + 1 <= nbins:
+    top = f0.max(axis=1)
+    if k <= 0 or 2 * k + 1 > nbins:
+        # No smoothing: the reference's own operations. A window wider than the histogram:
+        # the reference row by row.
+        covered = f0 >= t.coverage_level * top[:, None]
+        exact = np.full(rows, k <= 0)
+    else:
         padded = np.concatenate([f0[:, -k:], f0, f0[:, :k]], axis=1)
         run = np.zeros((rows, padded.shape[1] + 1))
         np.cumsum(padded, axis=1, out=run[:, 1:])
-        smooth = (run[:, 2 * k + 1 :] - run[:, : -(2 * k + 1)]) / (2 * k + 1)
-        level = t.coverage_level * smooth.max(axis=1)
-        margin = 1e-9 * run[:, -1]
-        exact = ~np.any(np.abs(smooth - level[:, None]) <= margin[:, None], axis=1)
-    else:
-        smooth = f0
-        exact = np.zeros(rows, bool)
-    top = f0.max(axis=1)
-    covered = smooth >= t.coverage_level * smooth.max(axis=1, keepdims=True)
+        # Window sums (the smoothed F0 times 2k + 1) against the level times 2k + 1.
+        window = run[:, 2 * k + 1 :] - run[:, : -(2 * k + 1)]
+        gap = window - (t.coverage_level * window.max(axis=1))[:, None]
+        covered = gap >= 0.0
+        np.abs(gap, out=gap)
+        exact = ~np.any(gap <= (1e-9 * run[:, -1])[:, None], axis=1)
     # np.mean of a boolean row is its count over its length: the same division.
     out = np.where(top > 0.0, covered.sum(axis=1) / nbins, 0.0)
-    for r in np.flatnonzero(~exact & (top > 0.0)):
+    for r in np.flatnonzero(~exact & (top > 0.0)).tolist():
         out[r] = _coverage(f0[r], t)
     return out
 

@@ -139,17 +139,13 @@ def _ordered_relations(
 
     Rows ``0..P-1`` are the pairs ``(first, second)``, rows ``P..2P-1`` the same pairs the
     other way round; every step of the rule base runs on all rows at once
-    (:func:`~.batch.decide_pairs`), then each row becomes its :class:`Relation`.
+    (:func:`~.batch.decide_pairs`), then each pair becomes its two :class:`Relation`.
     """
-    p, nbins = scene.f0.shape
-    half = nbins // 2
-    f0 = np.concatenate([scene.f0, np.concatenate([scene.f0[:, -half:], scene.f0[:, :-half]], 1)])
-    f2 = np.concatenate([scene.f2, np.concatenate([scene.f2[:, -half:], scene.f2[:, :-half]], 1)])
+    p = len(scene.first)
+    f0, f2 = _both_orders(scene.f0), _both_orders(scene.f2)
     # The degrees of the reversed pair are the pair's, turned (as relations_of_pair does).
     deg0, dev0 = four_direction_degrees(scene.f0)
     deg2, dev2 = four_direction_degrees(scene.f2)
-    deg0, dev0 = np.concatenate([deg0, deg0[:, _TURNED]]), np.concatenate([dev0, dev0[:, _TURNED]])
-    deg2, dev2 = np.concatenate([deg2, deg2[:, _TURNED]]), np.concatenate([dev2, dev2[:, _TURNED]])
     argument = np.concatenate([scene.first, scene.second])
     referent = np.concatenate([scene.second, scene.first])
     inter = np.concatenate([scene.intersection, scene.intersection])
@@ -159,33 +155,55 @@ def _ordered_relations(
     overlap = np.where(intersecting, inter / area_a, 0.0)
     referent_overlap = np.where(intersecting, inter / area_b, 0.0)
     # The coverage of F0 turned by half a turn is the same (see pairs._both_ways).
-    coverage = np.tile(coverages(scene.f0, t), 2)
+    coverage = coverages(scene.f0, t)
     decisions = decide_pairs(
-        (deg0, deg2), dev2, sector_shares(f0), (overlap, referent_overlap), coverage, t
+        (_turned(deg0), _turned(deg2)),
+        _turned(dev2),
+        sector_shares(f0),
+        (overlap, referent_overlap),
+        np.tile(coverage, 2),
+        t,
     )
     vertical = _verticals(argument, referent, inter / np.maximum(smaller, 1e-300), extents, t)
     has_vertical = np.array([v is not None for v in vertical], dtype=bool).reshape(-1)
-    confidence = decisions.confidence
     confidence = np.where(
-        has_vertical, np.maximum(confidence, np.minimum(1.0, 2.0 * overlap)), confidence
+        has_vertical,
+        np.maximum(decisions.confidence, np.minimum(1.0, 2.0 * overlap)),
+        decisions.confidence,
     )
-    d = decisions
     confidence = np.minimum(np.maximum(confidence, 0.0), 1.0)
-    per_row = [d.deviation, d.coverage, d.extends_share, overlap, referent_overlap]
-    numbers = np.column_stack(
-        [deg0, deg2, 0.5 * (deg0 + deg2), dev0, dev2, confidence, *per_row, inter, area_a, area_b]
-    ).tolist()
-    rows = _rows_in_order(len(labels), p)
-    names = (
-        [labels[k] for k in argument.tolist()],
-        [labels[k] for k in referent.tolist()],
+    # One Python float per number: those of a pair serve both its rows.
+    shared = [deg0, deg2, 0.5 * (deg0 + deg2), dev0, dev2, coverage, overlap[:p]]
+    shared += [referent_overlap[:p], scene.intersection, area_a[:p], area_b[:p]]
+    numbers = (
+        np.column_stack(shared).tolist(),
+        np.column_stack([confidence, decisions.deviation, decisions.extends_share]).tolist(),
     )
-    words = _words(decisions)
-    hybrid = np.concatenate([scene.hybrid, scene.hybrid]).tolist()
+    names = ([labels[k] for k in argument.tolist()], [labels[k] for k in referent.tolist()])
+    words = (names, _words(decisions), vertical, scene.hybrid.tolist())
+    n = len(labels)
+    places = ((scene.first * (n - 1) + scene.second - 1).tolist(),)
+    places += ((scene.second * (n - 1) + scene.first).tolist(),)
     with _collector_paused():
-        return _build(
-            rows, (names, words, vertical, hybrid), numbers, (list(f0), list(f2)), decisions
-        )
+        return _build(places, words, numbers, (list(f0), list(f2)), sentence_templates(decisions))
+
+
+def _both_orders(h: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``(2P, N)``: the pairs' histograms, then the same turned by half a turn (the reversed
+    pairs: ``PairHistograms.reversed``)."""
+    p, nbins = h.shape
+    half = nbins // 2
+    out = np.empty((2 * p, nbins))
+    out[:p] = h
+    out[p:, :half] = h[:, nbins - half :]
+    out[p:, half:] = h[:, : nbins - half]
+    return out
+
+
+def _turned(x: NDArray[np.float64]) -> NDArray[np.float64]:
+    """``(2P, 4)``: the pairs' values of the four directions, then the reversed pairs' (B's
+    "left" is A's "right")."""
+    return np.concatenate([x, x[:, _TURNED]])
 
 
 @contextlib.contextmanager
@@ -205,16 +223,6 @@ def _collector_paused() -> Iterator[None]:
     finally:
         if enabled:
             gc.enable()
-
-
-def _rows_in_order(n: int, p: int) -> list[int]:
-    """The row of each ordered pair ``(i, j)``, ``i != j``, in the order ``(0, 1), (0, 2), ...``:
-    pair ``k`` of ``np.triu_indices(n, 1)`` for ``i < j``, ``P + k`` for ``(j, i)``."""
-    i, j = np.divmod(np.arange(n * n), n)
-    i, j = i[i != j], j[i != j]
-    lo, hi = np.minimum(i, j), np.maximum(i, j)
-    k = lo * n - lo * (lo + 1) // 2 + (hi - lo - 1)
-    return np.where(i < j, k, p + k).tolist()
 
 
 def _words(decisions: PairDecisions) -> tuple[list[str | None], ...]:
@@ -248,15 +256,15 @@ def _verticals(
 
 
 def _build(
-    rows: list[int],
+    places: tuple[list[int], list[int]],
     words: tuple[
         tuple[list[str], list[str]], tuple[list[str | None], ...], list[str | None], list[bool]
     ],
-    numbers: list[list[float]],
+    numbers: tuple[list[list[float]], list[list[float]]],
     histograms: tuple[list[NDArray[np.float64]], list[NDArray[np.float64]]],
-    decisions: PairDecisions,
+    templates: tuple[list[str], dict[str, str]],
 ) -> list[tuple[Relation, PairHistograms]]:
-    """Each row's :class:`Relation` and :class:`PairHistograms`, rows in the order given.
+    """Each row's :class:`Relation` and :class:`PairHistograms`, at its place in the output.
 
     The objects are the ones ``Relation(...)`` and ``PairHistograms(...)`` make (the same
     fields, in the same order); they are filled through ``__dict__`` because a frozen
@@ -266,52 +274,69 @@ def _build(
     (arguments, referents), (kinds, primaries, secondaries, hedges, sec_hedges), verticals = words[
         :3
     ]
-    hybrid = words[3]
+    hybrids = words[3]
+    shared, own = numbers
     f0s, f2s = histograms
-    templates, vertical_templates = sentence_templates(decisions)
+    horizontal_templates, vertical_templates = templates
+    p = len(shared)
     new = object.__new__
-    out = []
-    for r in rows:
-        v = numbers[r]
-        argument, referent, vertical = arguments[r], referents[r], verticals[r]
-        horizontal = templates[r].format(argument=argument, referent=referent)
-        sentence = (
-            horizontal
-            if vertical is None
-            else vertical_templates[vertical].format(argument=argument, referent=referent)
-        )
-        rel = new(Relation)
-        rel.__dict__.update(
-            argument=argument,
-            referent=referent,
-            primary=primaries[r],
-            secondary=secondaries[r],
-            hedge=hedges[r],
-            sentence=sentence,
-            confidence=v[20],
-            secondary_hedge=sec_hedges[r],
-            kind=kinds[r],
-            horizontal_sentence=horizontal,
-            degrees0={"right": v[0], "behind": v[1], "left": v[2], "front": v[3]},
-            degrees2={"right": v[4], "behind": v[5], "left": v[6], "front": v[7]},
-            degrees={"right": v[8], "behind": v[9], "left": v[10], "front": v[11]},
-            deviation0={"right": v[12], "behind": v[13], "left": v[14], "front": v[15]},
-            deviation2={"right": v[16], "behind": v[17], "left": v[18], "front": v[19]},
-            deviation=v[21],
-            coverage=v[22],
-            extends_share=v[23],
-            overlap=v[24],
-            referent_overlap=v[25],
-            vertical=vertical,
-            hybrid=hybrid[r],
-            frame="object",
-        )
-        hist = new(PairHistograms)
-        hist.__dict__.update(
-            f0=f0s[r], f2=f2s[r], hybrid=hybrid[r], intersection=v[26], area_a=v[27], area_b=v[28]
-        )
-        out.append((rel, hist))
+    out: list[tuple[Relation, PairHistograms]] = [None] * (2 * p)  # type: ignore[list-item]
+    for k in range(p):
+        v, hybrid = shared[k], hybrids[k]
+        # The reversed pair's dicts hold the same floats, turned (B's left is A's right).
+        for r, back in ((k, False), (k + p, True)):
+            argument, referent, vertical = arguments[r], referents[r], verticals[r]
+            horizontal = horizontal_templates[r].format(argument=argument, referent=referent)
+            sentence = (
+                horizontal
+                if vertical is None
+                else vertical_templates[vertical].format(argument=argument, referent=referent)
+            )
+            x = own[r]
+            rel = new(Relation)
+            rel.__dict__.update(
+                argument=argument,
+                referent=referent,
+                primary=primaries[r],
+                secondary=secondaries[r],
+                hedge=hedges[r],
+                sentence=sentence,
+                confidence=x[0],
+                secondary_hedge=sec_hedges[r],
+                kind=kinds[r],
+                horizontal_sentence=horizontal,
+                degrees0=_four(v, 0, back),
+                degrees2=_four(v, 4, back),
+                degrees=_four(v, 8, back),
+                deviation0=_four(v, 12, back),
+                deviation2=_four(v, 16, back),
+                deviation=x[1],
+                coverage=v[20],
+                extends_share=x[2],
+                overlap=v[22] if back else v[21],
+                referent_overlap=v[21] if back else v[22],
+                vertical=vertical,
+                hybrid=hybrid,
+                frame="object",
+            )
+            hist = new(PairHistograms)
+            hist.__dict__.update(
+                f0=f0s[r],
+                f2=f2s[r],
+                hybrid=hybrid,
+                intersection=v[23],
+                area_a=v[25] if back else v[24],
+                area_b=v[24] if back else v[25],
+            )
+            out[places[back][k]] = (rel, hist)
     return out
+
+
+def _four(v: list[float], at: int, back: bool) -> dict[str, float]:
+    """The four directions' values ``v[at:at + 4]`` as a dict, turned for the reversed pair."""
+    if back:
+        return {"right": v[at + 2], "behind": v[at + 3], "left": v[at], "front": v[at + 1]}
+    return {"right": v[at], "behind": v[at + 1], "left": v[at + 2], "front": v[at + 3]}
 
 
 def relate(

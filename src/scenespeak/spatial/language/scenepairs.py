@@ -160,7 +160,12 @@ def _checked(
     f0: NDArray[np.float64], f2: NDArray[np.float64]
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """``pair_histograms``' checks of every histogram (``_as_histogram``) and its clipping at
-    0, on all rows at once; the first bad one raises the same error."""
+    0, on all rows at once; the first bad one raises the same error.
+
+    Finite forces that are all >= 0 (a finite sum, no value below 0) pass unchanged, as the
+    clipping would leave them; anything else takes the row-by-row checks."""
+    if all(h.size == 0 or (np.isfinite(h.sum()) and h.min() >= 0.0) for h in (f0, f2)):
+        return f0, f2
     ok = bool(np.isfinite(f0).all() and np.isfinite(f2).all())
     for h in (f0, f2):
         if ok and h.size:
