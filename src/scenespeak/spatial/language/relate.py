@@ -182,8 +182,8 @@ def _ordered_relations(
     names = ([labels[k] for k in argument.tolist()], [labels[k] for k in referent.tolist()])
     words = (names, _words(decisions), vertical, scene.hybrid.tolist())
     n = len(labels)
-    places = ((scene.first * (n - 1) + scene.second - 1).tolist(),)
-    places += ((scene.second * (n - 1) + scene.first).tolist(),)
+    forward: list[int] = (scene.first * (n - 1) + scene.second - 1).tolist()
+    places = (forward, (scene.second * (n - 1) + scene.first).tolist())
     with _collector_paused():
         return _build(places, words, numbers, (list(f0), list(f2)), sentence_templates(decisions))
 
