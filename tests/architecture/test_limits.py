@@ -55,7 +55,6 @@ KNOWN: dict[tuple[str, str, str], int] = {
     ("complexity", "inputs.py", "scene_folder_inputs"): 18,
     ("complexity", "live/sources.py", "rosbag_frames"): 18,
     ("complexity", "perception/calibfiles.py", "_check_matrices"): 17,
-    ("complexity", "perception/masks.py", "boxes_from_list"): 18,
     ("complexity", "perception/masks.py", "instances_from_array"): 19,
     ("complexity", "safeio.py", "_yaml_walk"): 17,
     ("complexity", "safeio.py", "read_bytes"): 17,

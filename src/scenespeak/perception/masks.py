@@ -277,6 +277,36 @@ def _box_label(d: Mapping[str, Any], names: Mapping[int, str] | None, src: str, 
     raise InputError(src, f'detection {i} has no "label" (or "category_name", "category_id")')
 
 
+def _one_box(
+    d: Any, i: int, names: Mapping[int, str] | None, source: str, size: tuple[int, int] | None
+) -> Box:
+    """Detection ``i`` of a COCO list as a :class:`Box` (one line naming it when malformed)."""
+    if not isinstance(d, Mapping):
+        raise InputError(source, f"detection {i} is not a JSON object")
+    bbox = d.get("bbox")
+    try:
+        x, y, w, h = (float(v) for v in bbox)  # type: ignore[union-attr]
+    except (TypeError, ValueError):
+        raise InputError(
+            source, f"detection {i}: bbox must be [x, y, w, h], got {bbox!r}"
+        ) from None
+    if not all(np.isfinite([x, y, w, h])) or w <= 0 or h <= 0:
+        raise InputError(source, f"detection {i}: bbox {bbox} has no area (w and h must be > 0)")
+    score = d.get("score", 1.0)
+    try:
+        s = float(score)
+    except (TypeError, ValueError):
+        raise InputError(source, f"detection {i}: score {score!r} is not a number") from None
+    box = Box(_box_label(d, names, source, i), x, y, w, h, s)
+    if size is not None:
+        x0, y0, x1, y1 = box.pixel_box(size)
+        if x1 <= x0 or y1 <= y0:
+            raise InputError(
+                source, f"detection {i}: bbox {bbox} lies outside the {size[0]}x{size[1]} image"
+            )
+    return box
+
+
 def boxes_from_list(
     data: Any,
     *,
@@ -303,33 +333,8 @@ def boxes_from_list(
         raise InputError(source, 'expected a JSON list of detections [{"bbox": [x, y, w, h], ...}]')
     out: list[Box] = []
     for i, d in enumerate(data):
-        if not isinstance(d, Mapping):
-            raise InputError(source, f"detection {i} is not a JSON object")
-        bbox = d.get("bbox")
-        try:
-            x, y, w, h = (float(v) for v in bbox)  # type: ignore[union-attr]
-        except (TypeError, ValueError):
-            raise InputError(
-                source, f"detection {i}: bbox must be [x, y, w, h], got {bbox!r}"
-            ) from None
-        if not all(np.isfinite([x, y, w, h])) or w <= 0 or h <= 0:
-            raise InputError(
-                source, f"detection {i}: bbox {bbox} has no area (w and h must be > 0)"
-            )
-        score = d.get("score", 1.0)
-        try:
-            s = float(score)
-        except (TypeError, ValueError):
-            raise InputError(source, f"detection {i}: score {score!r} is not a number") from None
-        box = Box(_box_label(d, names, source, i), x, y, w, h, s)
-        if size is not None:
-            x0, y0, x1, y1 = box.pixel_box(size)
-            if x1 <= x0 or y1 <= y0:
-                raise InputError(
-                    source,
-                    f"detection {i}: bbox {bbox} lies outside the {size[0]}x{size[1]} image",
-                )
-        if s >= min_score:
+        box = _one_box(d, i, names, source, size)
+        if box.score >= min_score:
             out.append(box)
     if not out:
         raise InputError(
