@@ -18,17 +18,18 @@ vertices per direction and cumulative counts, so the cost is close to O((n + m) 
 for convex objects. No line is ever sampled: the result is exact up to rounding. With an even
 number of directions only half are swept; the pairs give ``F(θ + π)`` too.
 
-Masks are traced into polygons (marching squares at level 0.5, holes included, simplified so
-that pixel staircases cost nothing) and computed exactly in the same way.
+Masks are traced into polygons (marching squares at level 0.5, holes included, simplified by
+Douglas-Peucker to 0.25 px) and computed exactly in the same way.
 
 Direction convention: ``h[k]`` is the value at angle ``2*pi*k/directions``; angle 0 is +x and
 ``pi/2`` is +y. For masks, +x is increasing column and +y is *decreasing* row (image "up").
 
 Layout
 ------
-``regions`` (validation, :func:`prepare`), ``masks`` (tracing), ``contact`` (overlap, via
-:mod:`scenespeak.geometry.polygons`), ``reference`` (the NumPy sweep: the specification),
-``_sweep`` + ``kernel`` (the compiled sweep, Numba; the reference without it), ``api``.
+``regions`` (validation, :func:`prepare`), ``masks`` + ``_trace`` (tracing: marching squares),
+``contact`` (overlap, via :mod:`scenespeak.geometry.polygons`), ``reference`` (the NumPy sweep:
+the specification), ``_sweep`` + ``kernel`` (the compiled sweep, Numba; the reference without
+it or for small work, see ``_jit``), ``_shapes`` (compiled helpers of ``prepare``), ``api``.
 
 Examples
 --------

@@ -30,7 +30,6 @@ from typing import TypeVar
 
 import numpy as np
 
-from scenespeak.spatial.forces import _trace
 from scenespeak.spatial.forces._jit import jit
 
 F = TypeVar("F", bound=Callable[..., object])
@@ -38,6 +37,8 @@ F = TypeVar("F", bound=Callable[..., object])
 # Below this |h| / |m| the divided difference of Ψ is replaced by its Taylor series (the
 # reference's _TAYLOR_RATIO).
 TAYLOR_RATIO = 1e-3
+# Regions with more edges than this are bucket-sorted before the insertion sort (_order).
+BUCKET_SORT_FROM = 96
 
 
 @jit
@@ -144,17 +145,58 @@ def _project(
 
 
 @jit
+def _bucket(tab: np.ndarray, perm: np.ndarray, keys: np.ndarray, lo_g: int, hi_g: int) -> None:
+    """Stable counting sort of ``perm[lo_g:hi_g]`` into ``n`` equal-width buckets of ``v_lo``."""
+    n = hi_g - lo_g
+    vmin = math.inf
+    vmax = -math.inf
+    for j in range(lo_g, hi_g):
+        v = tab[perm[j], 0]
+        keys[j] = v
+        vmin = min(vmin, v)
+        vmax = max(vmax, v)
+    if not vmax > vmin:
+        return
+    scale = (n - 1) / (vmax - vmin)
+    counts = np.zeros(n + 1, dtype=np.int64)
+    slot = np.empty(n, dtype=np.int64)
+    for j in range(n):
+        k = int((keys[lo_g + j] - vmin) * scale)
+        k = min(max(k, 0), n - 1)
+        slot[j] = k
+        counts[k + 1] += 1
+    for k in range(n):
+        counts[k + 1] += counts[k]
+    moved = np.empty(n, dtype=np.int64)
+    for j in range(n):
+        k = slot[j]
+        moved[counts[k]] = perm[lo_g + j]
+        counts[k] += 1
+    for j in range(n):
+        perm[lo_g + j] = moved[j]
+
+
+@jit
 def _order(
     tab: np.ndarray, perm: np.ndarray, keys: np.ndarray, lo_g: int, hi_g: int, first: bool
 ) -> None:
     """Keep ``perm[lo_g:hi_g]`` sorted by ``v_lo``: a full sort the first time, then insertion
     sort from the previous direction's order (few inversions between neighbours), on the
-    keys copied contiguous so that the shifts read and write neighbouring memory."""
+    keys copied contiguous so that the shifts read and write neighbouring memory.
+
+    Over half a turn every pair of vertices swaps once, so insertion sort alone costs
+    ``n² / 2`` moves per region; above :data:`BUCKET_SORT_FROM` edges the previous order is
+    first distributed into ``n`` buckets of equal ``v`` width (:func:`_bucket`), which leaves
+    only the few inversions inside each bucket: linear time per direction for outlines of
+    thousands of vertices (traced masks).
+    """
     if first:
         order = np.argsort(tab[lo_g:hi_g, 0])
         for j in range(hi_g - lo_g):
             perm[lo_g + j] = lo_g + order[j]
         return
+    if hi_g - lo_g > BUCKET_SORT_FROM:
+        _bucket(tab, perm, keys, lo_g, hi_g)
     for j in range(lo_g, hi_g):
         keys[j] = tab[perm[j], 0]
     for j in range(lo_g + 1, hi_g):
@@ -497,75 +539,3 @@ def sweep(
                 if both:
                     out[p, k, d + half] += acc[1, k]
     return out
-
-
-@jit
-def _point_segment(px: float, py: float, ax: float, ay: float, bx: float, by: float) -> float:
-    """Distance from point p to segment ab (``geometry.polygons.segment_distances``)."""
-    ex = bx - ax
-    ey = by - ay
-    den = ex * ex + ey * ey
-    t = ((px - ax) * ex + (py - ay) * ey) / den if den > 0.0 else 0.0
-    t = min(max(t, 0.0), 1.0)
-    dx = px - ax - t * ex
-    dy = py - ay - t * ey
-    return math.sqrt(dx * dx + dy * dy)
-
-
-@jit
-def _segments_near(p: np.ndarray, q: np.ndarray, i: int, j: int, tol: float) -> bool:
-    """Whether segments i and j of (p, q) cross or come within ``tol``."""
-    d1 = (q[j, 0] - p[j, 0]) * (p[i, 1] - p[j, 1]) - (q[j, 1] - p[j, 1]) * (p[i, 0] - p[j, 0])
-    d2 = (q[j, 0] - p[j, 0]) * (q[i, 1] - p[j, 1]) - (q[j, 1] - p[j, 1]) * (q[i, 0] - p[j, 0])
-    d3 = (q[i, 0] - p[i, 0]) * (p[j, 1] - p[i, 1]) - (q[i, 1] - p[i, 1]) * (p[j, 0] - p[i, 0])
-    d4 = (q[i, 0] - p[i, 0]) * (q[j, 1] - p[i, 1]) - (q[i, 1] - p[i, 1]) * (q[j, 0] - p[i, 0])
-    if d1 * d2 < 0.0 and d3 * d4 < 0.0:
-        return True
-    dist = min(
-        _point_segment(p[i, 0], p[i, 1], p[j, 0], p[j, 1], q[j, 0], q[j, 1]),
-        _point_segment(q[i, 0], q[i, 1], p[j, 0], p[j, 1], q[j, 0], q[j, 1]),
-        _point_segment(p[j, 0], p[j, 1], p[i, 0], p[i, 1], q[i, 0], q[i, 1]),
-        _point_segment(q[j, 0], q[j, 1], p[i, 0], p[i, 1], q[i, 0], q[i, 1]),
-    )
-    return dist <= tol
-
-
-@jit
-def first_contact(p: np.ndarray, q: np.ndarray, tol: float) -> np.ndarray:
-    """The first pair ``(i, j)``, ``i < j`` non-adjacent, of edges ``p → q`` that cross or touch.
-
-    ``[-1, -1]`` when the closed polygon is simple. Edges sorted by their smallest x; each is
-    compared only with the edges whose x-range can reach it (bounding boxes within ``tol``),
-    so the cost is near ``n log n`` for ordinary outlines. "First" is the smallest ``(i, j)``
-    in lexicographic order, as the NumPy check reports it.
-    """
-    n = p.shape[0]
-    xlo = np.minimum(p[:, 0], q[:, 0]) - tol
-    xhi = np.maximum(p[:, 0], q[:, 0]) + tol
-    ylo = np.minimum(p[:, 1], q[:, 1]) - tol
-    yhi = np.maximum(p[:, 1], q[:, 1]) + tol
-    order = np.argsort(xlo)
-    best = np.array([-1, -1], dtype=np.int64)
-    for a in range(n):
-        i0 = order[a]
-        for b in range(a + 1, n):
-            j0 = order[b]
-            if xlo[j0] > xhi[i0]:
-                break
-            if ylo[j0] > yhi[i0] or ylo[i0] > yhi[j0]:
-                continue
-            i = min(i0, j0)
-            j = max(i0, j0)
-            if j < i + 2 or (i == 0 and j == n - 1):
-                continue
-            if best[0] >= 0 and (i > best[0] or (i == best[0] and j >= best[1])):
-                continue
-            if _segments_near(p, q, i, j, tol):
-                best[0] = i
-                best[1] = j
-    return best
-
-
-#: Mask tracing (:mod:`~scenespeak.spatial.forces._trace`), compiled with the kernel.
-trace_links = jit(_trace.links_loop)
-trace_rings = jit(_trace.follow_rings)

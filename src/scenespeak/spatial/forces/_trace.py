@@ -13,7 +13,7 @@ clockwise. The result is the same polygon as scikit-image's (same vertices, same
 only the first vertex of each ring differs (here: the first crack in scan order).
 
 The table of links and the rings are plain loops (:func:`links_loop`, :func:`follow_rings`)
-that :mod:`~scenespeak.spatial.forces._sweep` compiles when the compiled kernel is loaded;
+that :mod:`~scenespeak.spatial.forces._shapes` compiles when the compiled kernel is loaded;
 otherwise the table is whole-array NumPy (:func:`crack_links`, the same table) and the rings
 are followed by the interpreter, so both paths give the same rings.
 """
@@ -105,7 +105,7 @@ def follow_rings(links: np.ndarray, width: int, height: int) -> tuple[np.ndarray
 
 
 def links_loop(padded: np.ndarray, segments: np.ndarray) -> np.ndarray:
-    """:func:`crack_links` as one loop over the cells (the same table; compiled in _sweep)."""
+    """:func:`crack_links` as one loop over the cells (the same table; compiled in _shapes)."""
     h, w = padded.shape
     hw = h * w
     links = np.full(2 * hw, -1, dtype=np.int64)
@@ -144,10 +144,10 @@ def rings(padded: NDArray[np.bool_]) -> list[NDArray[np.float64]]:
     from scenespeak.spatial.forces import _jit
 
     if _jit.loaded():
-        from scenespeak.spatial.forces import _sweep
+        from scenespeak.spatial.forces import _shapes
 
-        links = _sweep.trace_links(np.ascontiguousarray(padded, dtype=np.bool_), _SEGMENTS)
-        points, starts = _sweep.trace_rings(links, padded.shape[1], padded.shape[0])
+        links = _shapes.trace_links(np.ascontiguousarray(padded, dtype=np.bool_), _SEGMENTS)
+        points, starts = _shapes.trace_rings(links, padded.shape[1], padded.shape[0])
     else:
         links = crack_links(padded)
         points, starts = follow_rings(links, padded.shape[1], padded.shape[0])

@@ -141,7 +141,7 @@ def _check_simple(p: FloatArray, q: FloatArray, scale: float, name: str) -> None
 def _first_contact(p: FloatArray, q: FloatArray, tol: float) -> tuple[int, int] | None:
     """The first pair of non-adjacent edges that cross or come within ``tol`` (or None).
 
-    Compiled (:func:`~scenespeak.spatial.forces._sweep.first_contact`) once the compiled
+    Compiled (:func:`~scenespeak.spatial.forces._shapes.first_contact`) once the compiled
     kernel is loaded; else every pair of edges whose bounding boxes come within ``tol``, in
     NumPy (the same answer).
     """
@@ -149,7 +149,7 @@ def _first_contact(p: FloatArray, q: FloatArray, tol: float) -> tuple[int, int] 
 
     n = len(p)
     if _jit.loaded():
-        from scenespeak.spatial.forces._sweep import first_contact
+        from scenespeak.spatial.forces._shapes import first_contact
 
         i, j = (int(x) for x in first_contact(p, q, tol))
         return None if i < 0 else (i, j)
