@@ -247,8 +247,8 @@ def test_auto_policy_loads_numba_only_when_the_work_pays_for_it() -> None:
         sq = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
         forces.force_histograms(sq + [3.0, 0.0], sq)
         small = "numba" in sys.modules
-        objs = [forces.prepare(sq + [3.0 * k, 0.0], f"o{k}") for k in range(70)]
-        forces.f0_f2_pairs(objs, directions=180)  # 2415 pairs: about 0.6 s of reference
+        objs = [forces.prepare(sq + [3.0 * k, 0.0], f"o{k}") for k in range(90)]
+        forces.f0_f2_pairs(objs, directions=180)  # 4005 pairs: about 1.6 s of reference
         print(small, "numba" in sys.modules)
         """,
         {_jit.POLICY_ENV: "auto"},
