@@ -104,6 +104,35 @@ def follow_rings(links: np.ndarray, width: int, height: int) -> tuple[np.ndarray
     return points, starts[: rings + 1]
 
 
+def _follow_numpy(links: IntArray, width: int, height: int) -> tuple[NDArray[np.float64], IntArray]:
+    """:func:`follow_rings` for the interpreter: the same rings in the same order, visiting only
+    the cracks an outline passes (a Python list walk), coordinates computed as arrays."""
+    nxt = links.tolist()
+    seen = set()
+    order: list[int] = []
+    starts = [0]
+    for i in np.flatnonzero(links >= 0).tolist():
+        if i in seen:
+            continue
+        j = i
+        while j not in seen:
+            seen.add(j)
+            order.append(j)
+            j = nxt[j]
+        starts.append(len(order))
+    ids = np.asarray(order, dtype=np.int64)
+    hw = width * height
+    vertical = ids >= hw
+    local = np.where(vertical, ids - hw, ids)
+    points = np.column_stack(
+        [
+            local // width + np.where(vertical, 0.5, 0.0),
+            local % width + np.where(vertical, 0.0, 0.5),
+        ]
+    ).astype(np.float64)
+    return points.reshape(-1, 2), np.asarray(starts, dtype=np.int64)
+
+
 def links_loop(padded: np.ndarray, segments: np.ndarray) -> np.ndarray:
     """:func:`crack_links` as one loop over the cells (the same table; compiled in _shapes)."""
     h, w = padded.shape
@@ -149,6 +178,5 @@ def rings(padded: NDArray[np.bool_]) -> list[NDArray[np.float64]]:
         links = _shapes.trace_links(np.ascontiguousarray(padded, dtype=np.bool_), _SEGMENTS)
         points, starts = _shapes.trace_rings(links, padded.shape[1], padded.shape[0])
     else:
-        links = crack_links(padded)
-        points, starts = follow_rings(links, padded.shape[1], padded.shape[0])
+        points, starts = _follow_numpy(crack_links(padded), padded.shape[1], padded.shape[0])
     return [points[starts[k] : starts[k + 1]] for k in range(len(starts) - 1)]
