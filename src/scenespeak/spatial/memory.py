@@ -313,6 +313,23 @@ class WorkingMemory:
     ) -> list[tuple[Any, tuple[int, int]]]:
         """Raw relations of the present objects (recomputed only when a hull changed), then
         the debounced words of each ordered pair."""
+        self._refresh_raw(names)
+        out = []
+        changed: dict[frozenset[int], tuple[int, int]] = {}
+        for rel, ids in self._cache:
+            pw = self._pairs.setdefault(ids, _PairWords())
+            if self._debounce(pw, rel, ids):
+                changed.setdefault(frozenset(ids), ids)
+            if pw.said.argument != names[ids[0]] or pw.said.referent != names[ids[1]]:
+                pw.said = rel  # renamed (a second object with the same label)
+            out.append((pw.said, ids))
+        said = {ids: rel for rel, ids in out}
+        for a, b in changed.values():
+            self._moved_event(a, b, said, events)
+        return out
+
+    def _refresh_raw(self, names: dict[int, str]) -> None:
+        """The raw relations of the objects in view, recomputed when one's hull or name changed."""
         from scenespeak.spatial.language import relate_objects
 
         present = [
@@ -321,45 +338,41 @@ class WorkingMemory:
             if (e.said_status or e.status) != "out of view"
         ]
         key = tuple((e.id, e.version, names[e.id]) for e in present)
-        if key != self._cache_key:
-            heights = [e.heights for e in present if e.heights is not None]
-            raw = (
-                relate_objects(
-                    [e.hull for e in present],
-                    names=[names[e.id] for e in present],
-                    heights=heights if len(heights) == len(present) else None,
-                    directions=self.options.directions,
-                )
-                if len(present) >= 2
-                else []
+        if key == self._cache_key:
+            return
+        heights = [e.heights for e in present if e.heights is not None]
+        raw = (
+            relate_objects(
+                [e.hull for e in present],
+                names=[names[e.id] for e in present],
+                heights=heights if len(heights) == len(present) else None,
+                directions=self.options.directions,
             )
-            by_name = {names[e.id]: e.id for e in present}
-            self._cache = [(rel, (by_name[rel.argument], by_name[rel.referent])) for rel, _ in raw]
-            self._cache_key = key
-        out = []
-        changed: dict[frozenset[int], tuple[int, int]] = {}
-        for rel, ids in self._cache:
-            pw = self._pairs.setdefault(ids, _PairWords())
-            k = _key(rel)
-            if pw.said is None:
-                pw.said, pw.said_key = rel, k
-                pw.where = {i: _centre(self._entries[i].hull) for i in ids}
-            elif k == pw.said_key:
-                pw.said, pw.pending_key, pw.pending_n = rel, None, 0
-            else:
-                pw.pending_n = pw.pending_n + 1 if k == pw.pending_key else 1
-                pw.pending_key = k
-                if pw.pending_n >= self.options.confirm:
-                    if rel.primary != pw.said.primary:
-                        changed.setdefault(frozenset(ids), ids)
-                    pw.said, pw.said_key, pw.pending_key, pw.pending_n = rel, k, None, 0
-            if pw.said.argument != names[ids[0]] or pw.said.referent != names[ids[1]]:
-                pw.said = rel  # renamed (a second object with the same label)
-            out.append((pw.said, ids))
-        said = {ids: rel for rel, ids in out}
-        for a, b in changed.values():
-            self._moved_event(a, b, said, events)
-        return out
+            if len(present) >= 2
+            else []
+        )
+        by_name = {names[e.id]: e.id for e in present}
+        self._cache = [(rel, (by_name[rel.argument], by_name[rel.referent])) for rel, _ in raw]
+        self._cache_key = key
+
+    def _debounce(self, pw: _PairWords, rel: Any, ids: tuple[int, int]) -> bool:
+        """Take this frame's relation of a pair into its words: a new wording is said only
+        after ``confirm`` frames in a row. True when the primary direction said changed."""
+        k = _key(rel)
+        if pw.said is None:
+            pw.said, pw.said_key = rel, k
+            pw.where = {i: _centre(self._entries[i].hull) for i in ids}
+            return False
+        if k == pw.said_key:
+            pw.said, pw.pending_key, pw.pending_n = rel, None, 0
+            return False
+        pw.pending_n = pw.pending_n + 1 if k == pw.pending_key else 1
+        pw.pending_key = k
+        if pw.pending_n < self.options.confirm:
+            return False
+        moved = bool(rel.primary != pw.said.primary)
+        pw.said, pw.said_key, pw.pending_key, pw.pending_n = rel, k, None, 0
+        return moved
 
     def _moved_event(
         self,

@@ -8,12 +8,22 @@ these functions group them.
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
-from typing import Any
+from collections.abc import Mapping, Sequence
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-__all__ = ["BANDS", "breakdown", "breakdown_table", "found_by_label"]
+if TYPE_CHECKING:
+    from scenespeak.tools.evaluation_scores import EvaluationResult
+
+__all__ = ["BANDS", "PAPER", "breakdown", "breakdown_table", "format_table", "found_by_label"]
+
+#: The seed paper's own result (Luke, Blisard, Keller, Skubic, RO-MAN 2005, section V).
+PAPER: Mapping[str, Any] = {
+    "scenes": 100,
+    "usable": 76,
+    "note": "descriptions judged accurate by eye; no counts, errors or times reported",
+}
 
 #: Distance bands (metres from the left camera) of the tables by distance.
 BANDS: tuple[tuple[float, float], ...] = ((0.0, 1.0), (1.0, 1.5), (1.5, float("inf")))
@@ -92,3 +102,91 @@ def breakdown_table(scenes: Sequence[Any]) -> list[str]:
             lines.append(f"| {key} | {_frac(row['found'], row['total'])} | {err} |{extra}")
         lines.append("")
     return lines[:-1]
+
+
+def format_table(result: EvaluationResult) -> str:
+    """The paper's table, filled in, beside the paper's own result (Markdown).
+
+    Examples
+    --------
+    >>> from scenespeak.tools.evaluation import summarize
+    >>> print(format_table(summarize([])).splitlines()[2])
+    | measure | scenespeak | paper (Luke et al. 2005) |
+    """
+    d = result.to_dict()
+    head = (
+        f"scenespeak evaluate {result.dataset or '(scenes)'}: {result.n_scenes} scenes, "
+        f"{result.workers} worker(s), {result.wall_seconds:.1f} s wall clock"
+    )
+    lines = [head, "", "| measure | scenespeak | paper (Luke et al. 2005) |", "| --- | --- | --- |"]
+    lines += [f"| {a} | {b} | {c} |" for a, b, c in _summary_rows(result, d)]
+    lines += _tag_lines(d["centroid_rule"]["by_tag"])
+    found = found_by_label(result.scenes)
+    if found:
+        by_label = ", ".join(f"{lab} {f}/{n}" for lab, (f, n) in sorted(found.items()))
+        lines += ["", f"Objects found by label: {by_label}."]
+    lines += breakdown_table(result.scenes)
+    lines += _failed_lines(result)
+    return "\n".join(lines)
+
+
+def _summary_rows(result: EvaluationResult, d: Mapping[str, Any]) -> list[tuple[str, str, str]]:
+    """The rows of the main table: measure, scenespeak's figure, the paper's."""
+    ce, sp = d["centroid_error_m"], d["seconds_per_scene"]
+    cc, ct = result.clear
+    ac, at = result.ambiguous
+    uc, ut = result.usable_clear
+    cent = "–" if ce["median"] is None else f"{100 * ce['median']:.1f} / {100 * ce['mean']:.1f} cm"
+    secs = "–" if sp["median"] is None else f"{sp['median']:.2f} / {sp['mean']:.2f} s"
+    p90 = "–" if ce["p90"] is None else f"{100 * ce['p90']:.1f} cm"
+    return [
+        ("scenes usable (every object a hull, every pair a sentence)",
+         _frac(result.n_usable, result.n_scenes), _frac(PAPER["usable"], PAPER["scenes"])),
+        ("objects found (with a hull)",
+         _frac(result.objects_found, result.objects_total), "–"),
+        ("other objects reported (not in the truth)", str(result.objects_extra), "–"),
+        ("ordered pairs described",
+         _frac(result.pairs_described, result.pairs_total), "–"),
+        ("primary direction right, clear pairs", _frac(cc, ct), "\"accurate\" (not counted)"),
+        ("primary direction right, clear pairs of usable scenes", _frac(uc, ut), "–"),
+        ("primary direction right, ambiguous pairs", _frac(ac, at), "–"),
+        ("centroid error, median / mean", cent, "–"),
+        ("centroid error, 90th percentile", p90, "–"),
+        ("known objects reported where they are not", str(result.false_known), "–"),
+        ("\"surrounded\" between objects whose footprints are apart",
+         str(result.surrounded_apart), "–"),
+        ("time per scene, median / mean", secs, "–"),
+        ("scenes that failed outright", str(result.n_failed), "–"),
+        ("centroid-vector rule instead: clear pairs",
+         _frac(d["centroid_rule"]["clear_correct"], ct), "–"),
+        ("centroid-vector rule instead: ambiguous pairs",
+         _frac(d["centroid_rule"]["ambiguous_correct"], at), "–"),
+    ]  # fmt: skip
+
+
+def _tag_lines(tags: Mapping[str, Mapping[str, int]]) -> list[str]:
+    """The forces against the centroid-vector rule, per tag of the clear pairs."""
+    if not tags:
+        return []
+    lines = ["", "| clear pairs | pairs | forces right | centroid rule right |",
+             "| --- | --- | --- | --- |"]  # fmt: skip
+    for tag in ("elongated", "close", "partly hidden", "all"):
+        if tag in tags:
+            t = tags[tag]
+            lines.append(
+                f"| {tag} | {t['pairs']} | {_frac(t['forces'], t['pairs'])} | "
+                f"{_frac(t['centroid'], t['pairs'])} |"
+            )
+    return lines
+
+
+def _failed_lines(result: EvaluationResult) -> list[str]:
+    """The first ten failed scenes with their errors."""
+    failed = [s for s in result.scenes if s.error]
+    if not failed:
+        return []
+    lines = ["", "Failed scenes:"]
+    lines += [f"- {s.name}: {s.error}" for s in failed[:10]]
+    if len(failed) > 10:
+        lines.append(f"- ... and {len(failed) - 10} more")
+    return lines

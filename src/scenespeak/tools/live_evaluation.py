@@ -148,7 +148,7 @@ def _where_nothing_changed(
     ]
 
 
-def score_sequence(  # noqa: C901 (complexity 18 > 15: to be split)
+def score_sequence(
     seq: SequenceTruth,
     lines: Sequence[dict[str, Any]],
     *,
@@ -160,52 +160,11 @@ def score_sequence(  # noqa: C901 (complexity 18 > 15: to be split)
         _match_frame(ln, f.objects, match_distance)
         for ln, f in zip(lines, seq.frames, strict=False)
     ]
-    id_n = id_kept = 0
-    for a, b in itertools.pairwise(matches):
-        for tid, sid in a.items():
-            if tid in b:
-                id_n += 1
-                id_kept += int(b[tid] == sid)
-    votes: dict[int, Counter[int]] = {}
-    for m in matches:
-        for tid, sid in m.items():
-            votes.setdefault(sid, Counter())[tid] += 1
-    to_truth = {sid: c.most_common(1)[0][0] for sid, c in votes.items()}
-
-    sentences: list[dict[tuple[int, int], str]] = [
-        {(r["argument_id"], r["referent_id"]): r["sentence"] for r in ln["relations"]}
-        for ln in lines
-    ]
-    checks = flickers = changes = 0
-    for k in range(1, len(lines)):
-        if not _static(seq, k):
-            continue
-        for pair, s in sentences[k].items():
-            if pair in sentences[k - 1] and sentences[k - 1][pair] != s:
-                changes += 1
-        if k + 1 < len(lines) and _static(seq, k + 1):
-            for pair, s in sentences[k].items():
-                before, after = sentences[k - 1].get(pair), sentences[k + 1].get(pair)
-                if before is not None and after is not None:
-                    checks += 1
-                    flickers += int(before == after != s)
-
+    id_n, id_kept = _ids_kept(matches)
+    to_truth = _stream_to_truth(matches)
+    checks, flickers, changes = _steadiness(seq, lines)
     reported_events = [dict(r, frame=ln["frame"]) for ln in lines for r in ln["event_records"]]
-    explained: set[int] = set()
-    missed, delays = [], []
-    for ev in seq.events:
-        hit = None
-        for i, rep in enumerate(reported_events):
-            if i in explained or abs(rep["frame"] - ev["frame"]) > window:
-                continue
-            if _event_matches(rep, ev, to_truth):
-                hit = i
-                break
-        if hit is None:
-            missed.append(dict(ev))
-        else:
-            explained.add(hit)
-            delays.append(int(reported_events[hit]["frame"] - ev["frame"]))
+    missed, delays, explained = _explain_events(seq, reported_events, to_truth, window)
     false = [r for i, r in enumerate(reported_events) if i not in explained]
     # a false event "where nothing changed": no object moved, appeared or left in the frames
     # before it (``window`` of them)
@@ -228,6 +187,83 @@ def score_sequence(  # noqa: C901 (complexity 18 > 15: to be split)
         sum(1 for ln in lines if ln["recognised"]),
         len(still),
     )
+
+
+def _ids_kept(matches: Sequence[dict[int, int]]) -> tuple[int, int]:
+    """(true objects matched in two consecutive frames, of those with the same stream id)."""
+    id_n = id_kept = 0
+    for a, b in itertools.pairwise(matches):
+        for tid, sid in a.items():
+            if tid in b:
+                id_n += 1
+                id_kept += int(b[tid] == sid)
+    return id_n, id_kept
+
+
+def _stream_to_truth(matches: Sequence[dict[int, int]]) -> dict[int, int]:
+    """Stream id → the true id it was matched to most often."""
+    votes: dict[int, Counter[int]] = {}
+    for m in matches:
+        for tid, sid in m.items():
+            votes.setdefault(sid, Counter())[tid] += 1
+    return {sid: c.most_common(1)[0][0] for sid, c in votes.items()}
+
+
+def _steadiness(seq: SequenceTruth, lines: Sequence[dict[str, Any]]) -> tuple[int, int, int]:
+    """(static checks, flickers, sentence changes) over the frames where nothing moved.
+
+    A change: a pair's sentence differs from the frame before although the scene did not
+    change. A flicker: with three still frames, the middle one's sentence differs from the
+    two around it, which agree.
+    """
+    sentences: list[dict[tuple[int, int], str]] = [
+        {(r["argument_id"], r["referent_id"]): r["sentence"] for r in ln["relations"]}
+        for ln in lines
+    ]
+    checks = flickers = changes = 0
+    for k in range(1, len(lines)):
+        if not _static(seq, k):
+            continue
+        now, prev = sentences[k], sentences[k - 1]
+        changes += sum(1 for pair, s in now.items() if pair in prev and prev[pair] != s)
+        if k + 1 < len(lines) and _static(seq, k + 1):
+            nxt = sentences[k + 1]
+            for pair, s in now.items():
+                before, after = prev.get(pair), nxt.get(pair)
+                if before is not None and after is not None:
+                    checks += 1
+                    flickers += int(before == after != s)
+    return checks, flickers, changes
+
+
+def _explain_events(
+    seq: SequenceTruth,
+    reported: Sequence[dict[str, Any]],
+    to_truth: dict[int, int],
+    window: int,
+) -> tuple[list[dict[str, Any]], list[int], set[int]]:
+    """Each scripted event against the first unexplained report within ``window`` frames that
+    matches it: (missed events, delays in frames, indices of the reports that explain one)."""
+    explained: set[int] = set()
+    missed: list[dict[str, Any]] = []
+    delays: list[int] = []
+    for ev in seq.events:
+        hit = next(
+            (
+                i
+                for i, rep in enumerate(reported)
+                if i not in explained
+                and abs(rep["frame"] - ev["frame"]) <= window
+                and _event_matches(rep, ev, to_truth)
+            ),
+            None,
+        )
+        if hit is None:
+            missed.append(dict(ev))
+        else:
+            explained.add(hit)
+            delays.append(int(reported[hit]["frame"] - ev["frame"]))
+    return missed, delays, explained
 
 
 def summarize(scores: Sequence[SequenceScore]) -> dict[str, Any]:
