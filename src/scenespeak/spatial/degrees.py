@@ -348,14 +348,20 @@ def four_direction_degrees(
     degree = np.zeros((rows, 4))
     deviation = np.zeros((rows, 4))
     # Direction k's bins -(n-1) .. n-1 are quadrant k and quadrant k-1 but its first bin.
+    # The other 2n + 1 bins are its contrary forces: quadrants k+1 and k+2 and the first bin
+    # of quadrant k+3. Without any, nothing cancels: the contrary mass is 0.
     quadrants = (h != 0.0).reshape(rows, 4, n)
     whole, inner = quadrants.any(axis=2), quadrants[:, :, 1:].any(axis=2)
+    first = quadrants[:, :, 0]
     for k in range(4):
-        live = np.flatnonzero(whole[:, k] | inner[:, (k - 1) % 4])
-        for lo in range(0, live.size, DEGREE_BLOCK):
-            at = live[lo : lo + DEGREE_BLOCK]
-            found = _block_degrees(h, at, k * n)
-            degree[at, k], deviation[at, k] = found[0], found[1]
+        live = whole[:, k] | inner[:, (k - 1) % 4]
+        against = whole[:, (k + 1) % 4] | whole[:, (k + 2) % 4] | first[:, (k + 3) % 4]
+        for contrary in (True, False):
+            chosen = np.flatnonzero(live & (against == contrary))
+            for lo in range(0, chosen.size, DEGREE_BLOCK):
+                at = chosen[lo : lo + DEGREE_BLOCK]
+                found = _block_degrees(h, at, k * n, contrary)
+                degree[at, k], deviation[at, k] = found[0], found[1]
     return degree, deviation
 
 
@@ -406,10 +412,14 @@ def _turned_degrees(g: NDArray[np.float64]) -> NDArray[np.float64]:
     return _block_degrees(g, np.arange(len(g)), 0)
 
 
-def _block_degrees(h: NDArray[np.float64], at: NDArray[np.intp], shift: int) -> NDArray[np.float64]:
+def _block_degrees(
+    h: NDArray[np.float64], at: NDArray[np.intp], shift: int, contrary_forces: bool = True
+) -> NDArray[np.float64]:
     """``(4, len(at))``: degree, deviation, effective and contrary of the direction of bin
     ``shift`` of the rows ``at`` of ``h`` (``2 * N/4 - 1 <= 128``): the operations of
-    :func:`direction_degree`, on all rows at once."""
+    :func:`direction_degree`, on all rows at once. ``contrary_forces=False`` says that these
+    rows have no force outside the favourable bins: their contrary mass is then 0.0 and
+    nothing is cancelled (what :func:`direction_degree` finds), without gathering them."""
     nbins = h.shape[1]
     n = nbins // 4
     rows = len(at)
@@ -420,13 +430,16 @@ def _block_degrees(h: NDArray[np.float64], at: NDArray[np.intp], shift: int) -> 
     # the same order as a 1-D array, but not always a row of an F-ordered one.
     fav = h[at[:, None], fav_cols].reshape(2 * rows, n)
     fav[:, -1] *= 0.5
-    con = h[at[:, None], con_cols].reshape(2 * rows, n)
-    opposite = 0.5 * h[at, opposite_col]
-    moment = _row_dots(con, c.arm) + np.repeat(opposite, 2) * n
-    con_sum = con.sum(axis=1)
-    contrary = (con_sum[0::2] + con_sum[1::2]) + 2.0 * opposite
-    cancelled = _cancelled(fav, moment, c.dist)
-    contrary = (contrary + cancelled[0::2]) + cancelled[1::2]
+    if contrary_forces:
+        con = h[at[:, None], con_cols].reshape(2 * rows, n)
+        opposite = 0.5 * h[at, opposite_col]
+        moment = _row_dots(con, c.arm) + np.repeat(opposite, 2) * n
+        con_sum = con.sum(axis=1)
+        contrary = (con_sum[0::2] + con_sum[1::2]) + 2.0 * opposite
+        cancelled = _cancelled(fav, moment, c.dist)
+        contrary = (contrary + cancelled[0::2]) + cancelled[1::2]
+    else:
+        contrary = np.zeros(rows)
     fav_pos, fav_neg = fav[0::2], fav[1::2]
     eff = np.concatenate(
         [fav_neg[:, :-1], fav_pos[:, -1:] + fav_neg[:, -1:], fav_pos[:, ::-1][:, 1:]], axis=1
