@@ -89,9 +89,18 @@ def coverages(f0: NDArray[np.float64], t: Thresholds) -> NDArray[np.float64]:
     >>> coverages(h, DEFAULT_THRESHOLDS).tolist()     # 20 bins and 4 each side; all
     [0.15555555555555556, 1.0]
     """
+    # In blocks of rows, so that the temporaries stay in the cache.
+    out = [_block_coverages(f0[lo : lo + _BLOCK], t) for lo in range(0, len(f0), _BLOCK)]
+    return np.concatenate(out) if out else np.zeros(0)
+
+
+#: Rows of one block of :func:`coverages`.
+_BLOCK = 1024
+
+
+def _block_coverages(f0: NDArray[np.float64], t: Thresholds) -> NDArray[np.float64]:
+    """:func:`coverages` of one block of rows."""
     rows, nbins = f0.shape
-    if rows == 0:
-        return np.zeros(0)
     k = round(t.coverage_smooth_deg / (360.0 / nbins))
     top = f0.max(axis=1)
     if k <= 0 or 2 * k + 1 > nbins:
@@ -128,7 +137,7 @@ def sector_shares(f0: NDArray[np.float64]) -> NDArray[np.float64]:
     live = total > 0.0
     if not live.any():
         return out
-    part = f0[live]
+    part = f0 if bool(live.all()) else f0[live]
     for k, name in enumerate(DIRECTIONS):
         weight = _sector_weights(nbins, name)
         # A stack of (1, N) @ (N, 1) is one dot product per row (as ``weight @ f0``).
@@ -281,14 +290,14 @@ def sentence_templates(
     from scenespeak.spatial.language.words import VERTICAL_WORDS
 
     d = decisions
-    keys = np.column_stack([d.kind, d.primary, d.secondary, d.hedge, d.secondary_hedge]).tolist()
-    cache: dict[tuple[int, ...], str] = {}
-    out = []
-    for key in keys:
-        found = cache.get(tuple(key))
-        if found is None:
-            found = cache[tuple(key)] = _template(*key, frame=frame)
-        out.append(found)
+    # One code per distinct decision; each decision's template is rendered once.
+    code = d.kind * 5 + (d.primary + 1)
+    for part, size in ((d.secondary, 5), (d.hedge, 4), (d.secondary_hedge, 4)):
+        code = code * size + (part + 1)
+    _, first, inverse = np.unique(code, return_index=True, return_inverse=True)
+    parts = np.column_stack([d.kind, d.primary, d.secondary, d.hedge, d.secondary_hedge])
+    rendered = [_template(*row, frame=frame) for row in parts[first].tolist()]
+    out: list[str] = np.array(rendered, dtype=object)[inverse.reshape(-1)].tolist()
     blank = _Decision("direction", "left", None, None, None, 0.0, 0.0, 0.0, 0.0)
     vertical = {
         word: _render(blank, "{argument}", "{referent}", frame, word) for word in VERTICAL_WORDS
