@@ -53,6 +53,7 @@ from scenespeak.cleantext import check_label, clean_text
 from scenespeak.errors import ImageError, InputError
 
 __all__ = [
+    "as_path",
     "check_label",
     "check_xml",
     "clean_text",
@@ -89,6 +90,29 @@ def _kind_of(mode: int) -> str | None:
     return "is not a regular file"
 
 
+def as_path(path: object, *, error: ErrorType = InputError) -> Path:
+    """``path`` as a :class:`~pathlib.Path`, or ``error`` if it is not a usable file name.
+
+    Checked first by every reader, so that ``None``, a number or ``bytes`` passed by mistake
+    is one clear error, not a ``TypeError`` from deep inside ``pathlib`` or OpenCV.
+
+    >>> as_path("left.png").name
+    'left.png'
+    >>> as_path(123)
+    Traceback (most recent call last):
+    ...
+    scenespeak.errors.InputError: expected a file name (str or path), got int
+    """
+    if not isinstance(path, str | PathLike) or isinstance(path, bytes):
+        raise error(None, f"expected a file name (str or path), got {type(path).__name__}")
+    text = os.fspath(path)
+    if not isinstance(text, str):
+        raise error(None, f"expected a file name (str or path), got {type(text).__name__}")
+    if not text or "\x00" in text:
+        raise error(clean_text(repr(text)), "is not a valid file name")
+    return Path(text)
+
+
 def read_bytes(
     path: str | PathLike[str],
     *,
@@ -108,11 +132,7 @@ def read_bytes(
     what : str
         What the file is, for messages ("calibration file", "image", …).
     """
-    if not isinstance(path, str | PathLike) or isinstance(path, bytes):
-        raise error(None, f"expected a file name (str or path), got {type(path).__name__}")
-    if not str(path) or "\x00" in str(path):
-        raise error(clean_text(repr(str(path))), "is not a valid file name")
-    p = Path(path)
+    p = as_path(path, error=error)
     limit = _limits.current().max_file_bytes if max_bytes is None else max_bytes
     name = "max_file_bytes" if max_bytes is None else "max_text_bytes"
     try:

@@ -55,7 +55,6 @@ KNOWN: dict[tuple[str, str, str], int] = {
     ("complexity", "perception/calibfiles.py", "_check_matrices"): 17,
     ("complexity", "perception/masks.py", "instances_from_array"): 19,
     ("complexity", "safeio.py", "_yaml_walk"): 17,
-    ("complexity", "safeio.py", "read_bytes"): 17,
     ("complexity", "spatial/dialogue/answers.py", "_what"): 16,
     ("complexity", "tools/dialogue_eval.py", "_score_scene"): 28,
     ("complexity", "tools/fuzz/apicases.py", "_histogram_cases"): 20,

@@ -235,7 +235,7 @@ def test_image_without_keypoints_is_named(tmp_path: Path) -> None:
 def test_bad_arguments(tmp_path: Path, scene: Scene) -> None:
     cat = scene.objects["cat"]
     with ObjectDatabase.open(tmp_path / "o.db", create=True) as db:
-        with pytest.raises(DatabaseError, match="non-empty label"):
+        with pytest.raises(DatabaseError, match="label must not be empty"):
             db.add_object("  ", [cat])
         with pytest.raises(DatabaseError, match="no training images"):
             db.add_object("cat", [])

@@ -41,8 +41,10 @@ import numpy as np
 import yaml
 from numpy.typing import ArrayLike, NDArray
 
+from scenespeak import limits as _limits
 from scenespeak.errors import CalibrationError, ImageError
 from scenespeak.geometry.frames import DEFAULT_UP, ground_basis, heights, to_ground
+from scenespeak.safeio import as_path
 
 __all__ = [
     "DEFAULT_UP",
@@ -85,6 +87,8 @@ def _as_matrix(value: Any, shape: tuple[int, ...], name: str, source: str) -> ND
     """Coerce ``value`` (nested lists, flat list, ``{rows, cols, data}``) to a float array."""
     if isinstance(value, Mapping) and "data" in value:
         value = value["data"]
+    if np.iscomplexobj(value):
+        raise CalibrationError(source, f"{name} must be real numbers, got complex ones")
     try:
         arr = np.asarray(value, dtype=np.float64)
     except (TypeError, ValueError):
@@ -152,6 +156,11 @@ def _as_up(value: Any, source: str) -> NDArray[np.float64]:
 
 
 def _as_size(value: Any, source: str) -> tuple[int, int]:
+    items = list(value) if isinstance(value, list | tuple) else None
+    if items is not None and any(isinstance(v, bool | np.bool_ | str | bytes) for v in items):
+        raise CalibrationError(
+            source, f"image_size must be two whole numbers [width, height], got {value!r:.80}"
+        )
     try:
         w, h = (float(v) for v in np.asarray(value, dtype=np.float64).ravel())
     except (TypeError, ValueError):
@@ -323,6 +332,7 @@ def rig_from_short(
     up: ArrayLike | None = None,
     *,
     source: str = "calibration",
+    units: str = "m",
 ) -> StereoRig:
     """A parallel, rectified rig from the paper's three numbers.
 
@@ -330,17 +340,59 @@ def rig_from_short(
     ``((w − 1) / 2, (h − 1) / 2)`` in OpenCV's pixel-centre convention; no distortion; the right
     camera ``baseline`` metres to the right (``T = [−baseline, 0, 0]``).
 
+    ``units`` (``"m"``, ``"cm"`` or ``"mm"``) is the unit ``baseline`` is given in. A baseline
+    over :attr:`~scenespeak.limits.Limits.max_baseline_m` once in metres is refused with the
+    fix (``units="mm"``): a 120 m stereo rig is a 120 mm one written in the wrong unit.
+
     Examples
     --------
     >>> rig = rig_from_short(0.12, 60.0, (640, 480))
     >>> rig.T.tolist(), rig.K_left[:2, 2].tolist()
     ([-0.12, 0.0, 0.0], [319.5, 239.5])
+    >>> rig_from_short(120.0, 60.0, (640, 480), units="mm").baseline
+    0.12
+    >>> rig_from_short(120.0, 60.0, (640, 480))  # doctest: +ELLIPSIS
+    Traceback (most recent call last):
+    ...
+    scenespeak.errors.CalibrationError: calibration: the baseline is 120 m, ... units='mm' ...
     """
+    scale = {"m": 1.0, "cm": 0.01, "mm": 0.001}.get(units) if isinstance(units, str) else None
+    if scale is None:
+        raise CalibrationError(source, f"unknown unit {units!r}; use one of 'm', 'cm', 'mm'")
+    rig = _short_rig(baseline, hfov_deg, image_size, up, source=source, scale=scale)
+    lim = _limits.current()
+    b = rig.baseline
+    if b > lim.max_baseline_m:
+        unit = "mm" if b >= 20 else "cm"
+        raise CalibrationError(
+            source,
+            f"the baseline is {b:g} m, which looks like {unit}: pass units={unit!r} (CLI: --units "
+            f"{unit}) or the baseline in metres (--limit max_baseline_m=N allows larger rigs)",
+        )
+    return rig
+
+
+def _number(value: object, name: str, source: str) -> float:
+    if isinstance(value, bool | np.bool_ | str | bytes):
+        raise CalibrationError(source, f"{name} must be a number, got {value!r:.40}")
     try:
-        b = float(baseline)
-        hfov = float(hfov_deg)
+        return float(value)  # type: ignore[arg-type]
     except (TypeError, ValueError):
-        raise CalibrationError(source, "baseline and hfov_deg must be numbers") from None
+        raise CalibrationError(source, f"{name} must be a number, got {value!r:.40}") from None
+
+
+def _short_rig(
+    baseline: object,
+    hfov_deg: object,
+    image_size: object,
+    up: object,
+    *,
+    source: str,
+    scale: float = 1.0,
+) -> StereoRig:
+    """:func:`rig_from_short` without the plausibility check (a file's units come later)."""
+    b = _number(baseline, "baseline", source) * scale
+    hfov = _number(hfov_deg, "hfov_deg", source)
     if not math.isfinite(b) or b <= 0:
         raise CalibrationError(source, f"baseline must be a positive number of metres, got {b}")
     if not math.isfinite(hfov) or not 0 < hfov < 180:
@@ -356,7 +408,7 @@ def rig_from_short(
         np.zeros(5),
         np.eye(3),
         np.array([-b, 0.0, 0.0]),
-        np.array(DEFAULT_UP) if up is None else np.asarray(up, dtype=np.float64),
+        np.array(DEFAULT_UP) if up is None else up,  # type: ignore[arg-type]
         source,
     )
 
@@ -426,7 +478,7 @@ def rig_from_mapping(
         for key in ("baseline", "hfov_deg"):
             if key not in d:
                 raise CalibrationError(source, f'short form: missing key "{key}"')
-        return rig_from_short(
+        return _short_rig(
             d["baseline"],
             d["hfov_deg"],
             _size_from_mapping(d, source, image_size),
@@ -549,7 +601,7 @@ def load_rig(path: str | PathLike[str], *, image_size: tuple[int, int] | None = 
         Missing/unreadable file, syntax error, missing key, wrong shape, NaN/inf, singular
         matrix, R not a rotation, zero baseline, ...
     """
-    p = Path(path)
+    p = as_path(path, error=CalibrationError)
     source = str(p)
     suffix = p.suffix.lower()
     if suffix == ".xml":
@@ -579,7 +631,7 @@ def load_rig(path: str | PathLike[str], *, image_size: tuple[int, int] | None = 
 
 
 def _ros_camera(path: str | PathLike[str]) -> dict[str, Any]:
-    p = Path(path)
+    p = as_path(path, error=CalibrationError)
     data = _parse_yaml(_read_text(p), p)
     if not isinstance(data, Mapping):
         raise CalibrationError(p, "expected a ROS camera_info mapping at the top level")

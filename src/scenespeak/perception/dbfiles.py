@@ -290,7 +290,7 @@ def validate(path: Path) -> None:
     from scenespeak.perception.database import ObjectDatabase
 
     _probe(path)
-    ObjectDatabase.open(path, readonly=True).close()  # ours, this schema version
+    ObjectDatabase._connect(path, readonly=True, index="auto").close()  # ours, this schema
     lim = _limits.current()
     conn = connect(path, readonly=True)
     try:
@@ -433,7 +433,8 @@ def wait_for_writers(path: Path, waiting: Waiting | None = None) -> None:
 def create_empty(path: Path) -> bool:
     """Create an empty scenespeak database at ``path`` atomically (False: it already exists).
 
-    The schema comes from :meth:`ObjectDatabase.create`, run on a temporary file.
+    The schema is written by ``ObjectDatabase._new_file`` into a temporary file, which is
+    then linked into place.
     """
     from scenespeak.perception.database import ObjectDatabase
 
@@ -441,7 +442,7 @@ def create_empty(path: Path) -> bool:
         raise DatabaseError(path, f"the folder {str(path.parent)!r} does not exist")
     tmp = _tmp_name(path)
     try:
-        ObjectDatabase.create(tmp).close()
+        ObjectDatabase._new_file(tmp)
         return _publish(tmp, path)
     except OSError as exc:
         from scenespeak.safeio import _os_problem

@@ -14,7 +14,6 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from os import PathLike
-from pathlib import Path
 
 import cv2
 import numpy as np
@@ -155,9 +154,9 @@ def load_image(path: str | PathLike[str], *, gray: bool = True) -> NDArray[np.ui
         is not a readable image (truncated, corrupt: said once, without the decoder's own
         warnings).
     """
-    from scenespeak.safeio import decode_image, read_bytes
+    from scenespeak.safeio import as_path, decode_image, read_bytes
 
-    p = Path(path)
+    p = as_path(path, error=ImageError)
     data = read_bytes(p, error=ImageError, what="image file")
     flag = cv2.IMREAD_GRAYSCALE if gray else cv2.IMREAD_COLOR
     image = decode_image(data, p, flags=flag)
@@ -166,6 +165,29 @@ def load_image(path: str | PathLike[str], *, gray: bool = True) -> NDArray[np.ui
     if not gray:
         image = cv2.cvtColor(np.asarray(image, dtype=np.uint8), cv2.COLOR_BGR2RGB)
     return np.ascontiguousarray(image, dtype=np.uint8)
+
+
+def as_mask(mask: object, source: str | None = "mask") -> NDArray[np.bool_]:
+    """A 2-D boolean mask (non-zero = inside), or :class:`ImageError` saying why not.
+
+    Numbers and booleans are accepted; complex, text, object arrays and anything that is not
+    2-D are refused (a complex mask is never "non-zero" in a sense anyone means).
+
+    >>> as_mask([[0, 2], [0, 0]]).tolist()
+    [[False, True], [False, False]]
+    >>> as_mask(np.ones((2, 2), complex))
+    Traceback (most recent call last):
+    ...
+    scenespeak.errors.ImageError: mask: a mask must be booleans or numbers, got complex128
+    """
+    m = np.asarray(mask)
+    if m.dtype.kind not in "biuf":
+        raise ImageError(source, f"a mask must be booleans or numbers, got {m.dtype}")
+    if m.ndim != 2 or 0 in m.shape:
+        raise ImageError(source, f"a mask must be a 2-D (height, width) array, got shape {m.shape}")
+    if m.dtype.kind == "f" and not np.isfinite(m).all():
+        raise ImageError(source, "the mask has NaN or infinite values")
+    return np.asarray(m != 0)
 
 
 def detect(
@@ -201,7 +223,7 @@ def detect(
     gray = to_gray(image)
     cv_mask = None
     if mask is not None:
-        m = np.asarray(mask)
+        m = as_mask(mask)
         if m.shape != gray.shape:
             raise ImageError(None, f"mask shape {m.shape} differs from image shape {gray.shape}")
         cv_mask = m.astype(np.uint8) * 255

@@ -16,13 +16,15 @@ people actually get wrong:
 Each check raises :class:`~scenespeak.errors.CalibrationError` naming the calibration file; the
 bounds are in :mod:`scenespeak.limits` and can be raised there (``--limit``).
 
+>>> from dataclasses import replace
 >>> from scenespeak.perception.calibration import rig_from_short
->>> check_rig(rig_from_short(120.0, 60.0, (640, 480), source="calib.json"))
+>>> rig = replace(rig_from_short(0.12, 60.0, (640, 480), source="calib.json"), T=[-120.0, 0, 0])
+>>> check_rig(rig)  # a file's T = [-120, 0, 0]
 ... # doctest: +ELLIPSIS
 Traceback (most recent call last):
 ...
 scenespeak.errors.CalibrationError: calib.json: ... looks like millimetres: pass --units mm ...
->>> round(with_units(rig_from_short(120.0, 60.0, (640, 480)), "mm").baseline, 3)
+>>> round(with_units(rig, "mm").baseline, 3)
 0.12
 """
 

@@ -13,7 +13,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from scenespeak.errors import DatabaseError
+from scenespeak.cleantext import check_label
+from scenespeak.errors import DatabaseError, InputError
+from scenespeak.perception import dbfiles
 from scenespeak.perception.features import Features
 from scenespeak.perception.recognition.index import (
     _DIM,
@@ -39,6 +41,7 @@ from scenespeak.perception.recognition.schema import (
     save_quantiser,
 )
 from scenespeak.perception.recognition.views import ImageLike, MaskLike, _extract_view, _ViewData
+from scenespeak.safeio import as_path
 
 __all__ = ["ObjectDatabase"]
 
@@ -84,40 +87,45 @@ class ObjectDatabase:
 
     @classmethod
     def create(cls, path: str | PathLike[str], *, index: IndexKind = "auto") -> ObjectDatabase:
-        """Create a new, empty database file.
+        """Create a new, empty database file (atomically: never a 0-byte or half-made file).
 
         Raises
         ------
         DatabaseError
             If the file already exists or cannot be written.
         """
-        p = Path(path)
-        if p.exists():
+        p = as_path(path, error=DatabaseError)
+        if dbfiles.check_file(p, must_exist=False) or not dbfiles.create_empty(p):
             raise DatabaseError(p, "already exists; open it instead, or choose another name")
-        if not p.parent.exists():
-            raise DatabaseError(p, f"the folder {str(p.parent)!r} does not exist")
+        return cls._connect(p, readonly=False, index=index)
+
+    @classmethod
+    def _new_file(cls, p: Path) -> None:
+        """Write the schema into a new file ``p`` (:func:`dbfiles.create_empty` publishes it)."""
         try:
             conn = sqlite3.connect(p, isolation_level=None)
-            conn.execute("BEGIN IMMEDIATE")
-            for stmt in _SCHEMA.strip().split(";"):
-                if stmt.strip():
-                    conn.execute(stmt)
-            now = _now()
-            conn.executemany(
-                "INSERT INTO meta(key, value) VALUES (?, ?)",
-                [
-                    ("application", APPLICATION),
-                    ("schema_version", str(SCHEMA_VERSION)),
-                    ("descriptor", "sift-128-uint8 (OpenCV)"),
-                    ("created", now),
-                    ("generation", "0"),
-                ],
-            )
-            conn.execute("COMMIT")
-            conn.execute(f"PRAGMA application_id = {APPLICATION_ID}")
+            try:
+                conn.execute("BEGIN IMMEDIATE")
+                for stmt in _SCHEMA.strip().split(";"):
+                    if stmt.strip():
+                        conn.execute(stmt)
+                now = _now()
+                conn.executemany(
+                    "INSERT INTO meta(key, value) VALUES (?, ?)",
+                    [
+                        ("application", APPLICATION),
+                        ("schema_version", str(SCHEMA_VERSION)),
+                        ("descriptor", "sift-128-uint8 (OpenCV)"),
+                        ("created", now),
+                        ("generation", "0"),
+                    ],
+                )
+                conn.execute("COMMIT")
+                conn.execute(f"PRAGMA application_id = {APPLICATION_ID}")
+            finally:
+                conn.close()
         except sqlite3.Error as exc:
             raise DatabaseError(p, f"cannot create the database: {exc}") from None
-        return cls(p, conn, readonly=False, index_kind=index)
 
     @classmethod
     def open(
@@ -129,6 +137,10 @@ class ObjectDatabase:
         index: IndexKind = "auto",
     ) -> ObjectDatabase:
         """Open a database file (or create it, if ``create`` and it does not exist).
+
+        The file gets the same checks as on the command line (:mod:`~scenespeak.perception.
+        dbfiles`): no FIFO, device or folder, a bounded wait for other writers, and every row
+        validated ("database is damaged: view 3 of 'mug': …") before anything is used.
 
         Parameters
         ----------
@@ -144,39 +156,20 @@ class ObjectDatabase:
         ------
         DatabaseError
             Missing file, a folder, an empty file, a file that is not SQLite, an SQLite file
-            that is not ours, another schema version, or a corrupt file.
+            that is not ours, another schema version, a damaged row or a corrupt file.
         """
-        p = Path(path)
-        if not p.exists():
-            if create and not readonly:
-                return cls.create(p, index=index)
-            raise DatabaseError(
-                p, "no such file; create it with `scenespeak db add --db FILE --label NAME IMAGE`"
-            )
-        if p.is_dir():
-            raise DatabaseError(p, "is a folder, not a scenespeak object database file")
-        try:
-            with p.open("rb") as fh:
-                head = fh.read(len(_SQLITE_MAGIC))
-        except OSError as exc:
-            raise DatabaseError(p, f"cannot be read: {exc.strerror or exc}") from None
-        if len(head) == 0:
-            raise DatabaseError(
-                p,
-                "the file is empty (0 bytes): it is not a scenespeak object database; "
-                "delete it or choose another name",
-            )
-        if head != _SQLITE_MAGIC:
-            raise DatabaseError(p, "is not a scenespeak object database (not an SQLite file)")
-        try:
-            if readonly:
-                conn = sqlite3.connect(
-                    f"{p.resolve().as_uri()}?mode=ro", uri=True, isolation_level=None
-                )
-            else:
-                conn = sqlite3.connect(p, isolation_level=None)
-        except sqlite3.Error as exc:
-            raise DatabaseError(p, f"cannot be opened: {exc}") from None
+        p = as_path(path, error=DatabaseError)
+        if not dbfiles.check_file(p, must_exist=not create or readonly):
+            dbfiles.create_empty(p)  # False: another process created it first; open that
+        _check_magic(p)
+        dbfiles.validate(p)
+        return cls._connect(p, readonly=readonly, index=index)
+
+    @classmethod
+    def _connect(cls, p: Path, *, readonly: bool, index: IndexKind) -> ObjectDatabase:
+        """Connect to an existing regular file and check that it is ours (this schema)."""
+        _check_magic(p)
+        conn = dbfiles.connect(p, readonly=readonly)
         try:
             _check_schema(p, conn)
         except BaseException:
@@ -317,9 +310,10 @@ class ObjectDatabase:
             An image (or mask) that cannot be read, or has no keypoints; the database is left
             as it was.
         """
-        label = str(label).strip()
-        if not label:
-            raise DatabaseError(self.path, "an object needs a non-empty label")
+        try:  # the command line's rules: printable text, no escapes, not empty, bounded
+            label = check_label(label, "label").strip()
+        except InputError as exc:
+            raise DatabaseError(self.path, f"label: {exc.problem}") from None
         self._check_writable()
         images = list(images)
         if not images:
@@ -533,7 +527,7 @@ class ObjectDatabase:
                 centroids=centroids,
                 cells=cells,
             )
-            if centroids is None and not self.readonly:
+            if (centroids is None or index.cache_rejected) and not self.readonly:
                 save_quantiser(self.conn, gen, index)
             return index
         desc = np.empty((total, _DIM), np.uint8)
@@ -583,6 +577,16 @@ class ObjectDatabase:
         self.load(nprobe=opts.nprobe)
         assert self._loaded is not None
         return label_features(self._loaded, features, opts)
+
+
+def _check_magic(p: Path) -> None:
+    try:
+        with p.open("rb") as fh:
+            head = fh.read(len(_SQLITE_MAGIC))
+    except OSError as exc:
+        raise DatabaseError(p, f"cannot be read: {exc.strerror or exc}") from None
+    if head != _SQLITE_MAGIC:
+        raise DatabaseError(p, "is not a scenespeak object database (not an SQLite file)")
 
 
 def _insert_view(conn: sqlite3.Connection, oid: int, v: _ViewData) -> None:

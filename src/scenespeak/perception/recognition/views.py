@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from os import PathLike
 
@@ -10,7 +11,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from scenespeak.errors import ImageError
-from scenespeak.perception.features import Features, detect, load_image, to_gray
+from scenespeak.perception.features import Features, as_mask, detect, load_image, to_gray
 
 __all__ = ["ImageLike", "MaskLike", "outline_from_mask"]
 
@@ -45,7 +46,12 @@ def outline_from_mask(mask: NDArray[np.generic], *, tolerance: float = 1.0) -> N
     >>> outline_from_mask(m).tolist()
     [[5.0, 10.0], [5.0, 19.0], [29.0, 19.0], [29.0, 10.0]]
     """
-    m = (np.asarray(mask) != 0).astype(np.uint8)
+    m = as_mask(mask).astype(np.uint8)
+    number = int | float | np.integer | np.floating
+    if isinstance(tolerance, bool) or not isinstance(tolerance, number):
+        raise ImageError("tolerance", f"must be a number of pixels, got {tolerance!r:.40}")
+    if not (math.isfinite(float(tolerance)) and tolerance >= 0):
+        raise ImageError("tolerance", f"must be a finite number of pixels >= 0, got {tolerance}")
     contours, _ = cv2.findContours(m, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
     if not contours:
         return np.zeros((0, 2), np.float32)
@@ -123,6 +129,12 @@ def _extract_view(
     source = _source_name(image, i, "image")
     feats = detect(gray, mask=m, max_features=max_features, contrast_threshold=contrast_threshold)
     if len(feats) == 0:
+        if m is not None and isinstance(mask, str | PathLike):
+            raise ImageError(
+                mask,
+                f"no SIFT keypoints found inside this mask ({int(m.sum())} pixels) on {source}; "
+                "use a mask that covers the object, or a sharper, more textured image",
+            )
         raise ImageError(
             source,
             "no SIFT keypoints found"
