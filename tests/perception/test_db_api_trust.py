@@ -161,7 +161,7 @@ def test_readers_check_the_type_of_the_name_first(value: object) -> None:
 @pytest.mark.parametrize(
     ("args", "kwargs", "says"),
     [
-        ((120.0, 60.0, (320, 240)), {}, 'units="mm"'),
+        ((120.0, 60.0, (320, 240)), {}, "units='mm'"),
         ((0.12, 60.0, ("320", "240")), {}, "whole numbers"),
         ((0.12, 60.0, (True, True)), {}, "whole numbers"),
         ((0.12, 60.0, (320, 240), [0, -1j, 0]), {}, "complex"),
