@@ -154,6 +154,11 @@ def check_histogram(h: object, name: str = "histogram") -> NDArray[np.float64]:
         raise InputError(name, "contains NaN or infinite values")
     if (arr < 0).any():
         raise InputError(name, "has negative values; forces are never negative")
+    with np.errstate(over="ignore"):
+        if not np.isfinite(arr.sum()):
+            raise InputError(
+                name, "forces are too large to add up in float64; normalise the histogram"
+            )
     return arr
 
 

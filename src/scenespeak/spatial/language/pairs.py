@@ -12,7 +12,13 @@ from scenespeak.errors import InputError, ScenespeakError
 from scenespeak.geometry.polygons import as_polygon, intersection_area, polygon_area
 from scenespeak.spatial.degrees import DIRECTIONS, DirectionDegree, many_degrees
 from scenespeak.spatial.language.relation import Relation
-from scenespeak.spatial.language.rules import _as_histogram, _coverage, _Facts, _relation_from
+from scenespeak.spatial.language.rules import (
+    _as_histogram,
+    _check_something,
+    _coverage,
+    _Facts,
+    _relation_from,
+)
 from scenespeak.spatial.language.thresholds import DEFAULT_THRESHOLDS, Thresholds
 from scenespeak.spatial.language.vertical import vertical_relation
 from scenespeak.spatial.language.words import _label
@@ -191,6 +197,8 @@ def relation_of_pair(
     referent = _label(referent, "referent")
     if (a_heights is None) != (b_heights is None):
         raise InputError("a_heights/b_heights", "give the heights of both objects, or neither")
+    for h, name in ((pair.f0, "f0"), (pair.f2, "f2")):  # as describe_relation: no force,
+        _check_something(_as_histogram(h, name), name)  # no sentence
     return _describe_pair(pair, (argument, referent), (a_heights, b_heights), t)
 
 

@@ -64,7 +64,9 @@ def _check_something(a: NDArray[np.float64], name: str) -> None:
             "is zero in every direction (no force between the objects: empty, identical or "
             "degenerate regions), so nothing can be said about where one is from the other",
         )
-    if not math.isfinite(float(a.sum())):
+    with np.errstate(over="ignore"):  # said once, below: not numpy's warning line too
+        total = float(a.sum())
+    if not math.isfinite(total):
         raise InputError(name, "forces are too large to add up in float64; normalise the histogram")
 
 
