@@ -122,7 +122,10 @@ class SceneInputs:
             )
         if form in ("stereo", "stereo-masks"):
             if self.calib is None:
-                raise InputError("--calib", "a stereo pair (LEFT RIGHT) needs its calibration")
+                need = "" if self.db or self.masks else " and the object database (--db or --masks)"
+                raise InputError(
+                    "--calib", f"a stereo pair (LEFT RIGHT) needs its calibration{need}"
+                )
             if self.depth is not None:
                 raise InputError("--depth", "give a stereo pair or a depth image, not both")
             if self.boxes is not None:
@@ -146,8 +149,8 @@ class SceneInputs:
             raise InputError(
                 str(self.color),
                 "a single image needs --depth and --intrinsics (with --db, --masks or --boxes), "
-                "or --masks / --boxes for relations in the image plane; a stereo pair needs "
-                "LEFT RIGHT --calib",
+                "or --masks / --boxes for relations in the image plane; or give the right image "
+                "too: a stereo pair needs LEFT RIGHT --calib",
             )
 
 

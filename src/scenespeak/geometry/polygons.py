@@ -9,6 +9,7 @@ oriented boundary edges; anything with ``start``/``end`` edge arrays (a :class:`
 
 from __future__ import annotations
 
+import math
 from typing import Protocol, TypeVar
 
 import numpy as np
@@ -53,13 +54,24 @@ _shift = cyclic_next
 def polygon_area(p: NDArray[np.float64]) -> float:
     """Signed shoelace area (positive for counter-clockwise vertices).
 
+    When the products overflow (coordinates near 1e300) it is computed again relative to the
+    first vertex (the same area: the shoelace sum is translation-invariant), without numpy's
+    overflow warning.
+
     Examples
     --------
     >>> polygon_area(np.array([[0.0, 0.0], [2.0, 0.0], [2.0, 1.0], [0.0, 1.0]]))
     2.0
+    >>> polygon_area(np.array([[0.0, 0.0], [2.0, 0.0], [2.0, 1.0], [0.0, 1.0]]) + 1e300)
+    0.0
     """
     x, y = p[:, 0], p[:, 1]
-    return 0.5 * float(np.dot(x, _shift(y)) - np.dot(_shift(x), y))
+    with np.errstate(over="ignore", invalid="ignore"):
+        area = 0.5 * float(np.dot(x, _shift(y)) - np.dot(_shift(x), y))
+        if not math.isfinite(area) and p.shape[0]:
+            x, y = x - x[0], y - y[0]
+            area = 0.5 * float(np.dot(x, _shift(y)) - np.dot(_shift(x), y))
+    return area
 
 
 def is_convex(p: NDArray[np.float64]) -> bool:

@@ -363,11 +363,11 @@ def rig_from_short(
     lim = _limits.current()
     b = rig.baseline
     if b > lim.max_baseline_m:
-        unit = "mm" if b >= 20 else "cm"
+        unit, name = ("mm", "millimetres") if b >= 20 else ("cm", "centimetres")
         raise CalibrationError(
             source,
-            f"the baseline is {b:g} m, which looks like {unit}: pass units={unit!r} (CLI: --units "
-            f"{unit}) or the baseline in metres (--limit max_baseline_m=N allows larger rigs)",
+            f"the baseline is {b:g} m, which looks like {name}: pass units={unit!r} (CLI: "
+            f"--units {unit}) or metres (--limit max_baseline_m=N allows larger rigs)",
         )
     return rig
 

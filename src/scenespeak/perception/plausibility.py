@@ -16,7 +16,7 @@ people actually get wrong:
 Each check raises :class:`~scenespeak.errors.CalibrationError` naming the calibration file; the
 bounds are in :mod:`scenespeak.limits` and can be raised there (``--limit``).
 
->>> from dataclasses import replace
+>>> from dataclasses import dataclass, replace
 >>> from scenespeak.perception.calibration import rig_from_short
 >>> rig = replace(rig_from_short(0.12, 60.0, (640, 480), source="calib.json"), T=[-120.0, 0, 0])
 >>> check_rig(rig)  # a file's T = [-120, 0, 0]
@@ -31,14 +31,14 @@ scenespeak.errors.CalibrationError: calib.json: ... looks like millimetres: pass
 from __future__ import annotations
 
 import math
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from typing import Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from scenespeak import limits as _limits
-from scenespeak.errors import CalibrationError, InputError
+from scenespeak.errors import CalibrationError, ImageError, InputError
 from scenespeak.perception.calibration import Rectification, StereoRig, rectify
 
 __all__ = [
@@ -165,34 +165,85 @@ def check_rig(rig: StereoRig) -> StereoRig:
     return rig
 
 
+@dataclass(frozen=True)
+class _PairMatches:
+    """Mutual ratio-test SIFT matches of a pair, before any stereo constraint."""
+
+    keypoints: tuple[int, int]
+    left_xy: NDArray[np.float64]  # raw pixel positions of the matches
+    right_xy: NDArray[np.float64]
+    left_rect: NDArray[np.float64]  # the same, rectified
+    right_rect: NDArray[np.float64]
+
+
 def _sift_matches(
     left: NDArray[np.generic], right: NDArray[np.generic], rect: Rectification
-) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """Rectified positions of mutual ratio-test SIFT matches in the epipolar band (any sign)."""
+) -> _PairMatches:
+    """Ratio-test SIFT matches anywhere in the other image (raw and rectified positions)."""
     import cv2
 
     from scenespeak.perception.features import detect, to_gray
 
     fl = detect(to_gray(left), max_features=1500)
     fr = detect(to_gray(right), max_features=1500)
+    none = np.zeros((0, 2))
     if len(fl) < 8 or len(fr) < 8:
-        return np.zeros((0, 2)), np.zeros((0, 2))
+        return _PairMatches((len(fl), len(fr)), none, none, none, none)
     matcher = cv2.BFMatcher(cv2.NORM_L2)
-    dl = fl.descriptors.astype(np.float32)
-    dr = fr.descriptors.astype(np.float32)
-    knn = matcher.knnMatch(dl, dr, k=2)
+    knn = matcher.knnMatch(
+        fl.descriptors.astype(np.float32), fr.descriptors.astype(np.float32), k=2
+    )
     pairs = [
         (m[0].queryIdx, m[0].trainIdx)
         for m in knn
         if len(m) == 2 and m[0].distance < 0.7 * m[1].distance
     ]
     if not pairs:
-        return np.zeros((0, 2)), np.zeros((0, 2))
+        return _PairMatches((len(fl), len(fr)), none, none, none, none)
     li, ri = np.array(pairs).T
-    lxy = rect.rectify_points(fl.xy[li], "left")
-    rxy = rect.rectify_points(fr.xy[ri], "right")
-    band = np.abs(lxy[:, 1] - rxy[:, 1]) <= 1.5
-    return lxy[band], rxy[band]
+    lxy, rxy = np.asarray(fl.xy[li], np.float64), np.asarray(fr.xy[ri], np.float64)
+    with np.errstate(all="ignore"):  # a wild calibration may send points anywhere
+        lr = rect.rectify_points(lxy, "left")
+        rr = rect.rectify_points(rxy, "right")
+    return _PairMatches((len(fl), len(fr)), lxy, rxy, lr, rr)
+
+
+def _check_same_scene(m: _PairMatches, names: tuple[str, str], source: str) -> None:
+    """Refuse two images that are not a stereo pair, or a calibration that does not fit them.
+
+    * both images textured (>= 100 keypoints) but under 8 features match anywhere in the other
+      image: not two views of one scene (a wrong file, noise);
+    * the matches' raw disparity is zero: both files are the same view (left given twice);
+    * many matches, but under 20 % of them within 4 px of the same rectified row: the
+      calibration (R, distortion, K) does not fit these images.
+    """
+    n = len(m.left_xy)
+    both = f"{names[0]}, {names[1]}"
+    if min(m.keypoints) >= 100 and n < 8:
+        raise ImageError(
+            both,
+            f"the two images do not show the same scene: only {n} of {m.keypoints[0]} and "
+            f"{m.keypoints[1]} SIFT features match anywhere in the other image; give the left "
+            "and right images of one stereo pair",
+        )
+    if n < 20:
+        return
+    shift = np.abs(m.left_xy - m.right_xy).max(axis=1)
+    if float(np.median(shift)) < 0.5:
+        raise ImageError(
+            both,
+            f"{names[1]} shows the same view as {names[0]} ({n} matches, median shift "
+            f"{float(np.median(shift)):.2g} px): give the other camera's image as RIGHT",
+        )
+    dy = np.abs(m.left_rect[:, 1] - m.right_rect[:, 1])
+    on_row = float(np.mean(np.isfinite(dy) & (dy <= 4.0)))
+    if on_row < 0.2:
+        raise CalibrationError(
+            source,
+            f"{n} SIFT features match between the images, but only {on_row:.0%} of them lie on "
+            "the same rectified row: the calibration does not fit these images (check R, the "
+            "distortion, K and the image size)",
+        )
 
 
 def check_pair_order(
@@ -204,10 +255,14 @@ def check_pair_order(
     rect: Rectification | None = None,
     min_matches: int = 20,
 ) -> float:
-    """Refuse a pair whose matches mostly have negative disparity (images swapped).
+    """Refuse a pair that is not one (see below) or whose matches mostly have negative
+    disparity (images swapped).
 
     Matches are taken without the usual positive-disparity filter (which would hide the
-    problem: a swapped pair keeps only its few wrong matches and reports them far away).
+    problem: a swapped pair keeps only its few wrong matches and reports them far away), and
+    first without the epipolar band, which tells apart an image that is not the other half of
+    the pair (no feature matches anywhere; or the same view twice) from a calibration that does
+    not fit the images (features match, but not along rectified rows).
 
     Returns
     -------
@@ -216,11 +271,22 @@ def check_pair_order(
 
     Raises
     ------
+    ImageError
+        Two textured images with (almost) no feature in common, or the same view twice (the
+        message names both images).
     CalibrationError
-        More than half of at least ``min_matches`` matches are negative.
+        More than half of at least ``min_matches`` matches are negative; or the images match
+        but not along the calibration's rectified rows.
     """
+    size = (rig.image_size[1], rig.image_size[0])
+    if np.shape(left)[:2] != size or np.shape(right)[:2] != size:
+        return 0.0  # the stereo stage names the image whose size does not fit the calibration
     r = rect if rect is not None else rectify(rig)
-    lxy, rxy = _sift_matches(left, right, r)
+    matches = _sift_matches(left, right, r)
+    _check_same_scene(matches, names, rig.source)
+    lxy, rxy = matches.left_rect, matches.right_rect
+    band = np.abs(lxy[:, 1] - rxy[:, 1]) <= 1.5
+    lxy, rxy = lxy[band], rxy[band]
     if len(lxy) < min_matches:
         return 0.0
     disparity = lxy[:, 0] - rxy[:, 0] + r.doffs
