@@ -236,7 +236,7 @@ def check_file(path: Path, *, must_exist: bool = True) -> bool:
             ) from None
         return False
     except OSError as exc:
-        from scenespeak.safeio import _os_problem
+        from scenespeak.safetext import _os_problem
 
         raise DatabaseError(path, _os_problem(exc)) from None
     if stat.S_ISDIR(st.st_mode):
@@ -445,7 +445,7 @@ def create_empty(path: Path) -> bool:
         ObjectDatabase._new_file(tmp)
         return _publish(tmp, path)
     except OSError as exc:
-        from scenespeak.safeio import _os_problem
+        from scenespeak.safetext import _os_problem
 
         raise DatabaseError(path, f"cannot create the database ({_os_problem(exc)})") from None
     finally:
