@@ -18,12 +18,10 @@ saved scene needs no NumPy, OpenCV or SciPy (``benchmarks/bench_ask.py``).
 
 from __future__ import annotations
 
-import json
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from os import PathLike
-from pathlib import Path
 from typing import Any
 
 from scenespeak.errors import InputError
@@ -292,20 +290,25 @@ def scene_from_dict(data: Mapping[str, Any], source: str = "scene") -> DialogueS
 def load_scene(path: str | PathLike[str]) -> DialogueScene:
     """Read a saved ``scenespeak describe --format json`` file.
 
+    Read as untrusted input (:mod:`scenespeak.safetext`, the standard library only): a regular
+    file under ``max_text_bytes`` (a FIFO never blocks), UTF-8, nesting and numbers bounded.
+
     Raises
     ------
     InputError
-        When the file is missing, not JSON, or not a describe output.
+        When the file is missing, not a regular file, too large, not UTF-8, not JSON, nested
+        too deeply, or not a describe output.
     """
-    p = Path(path)
+    from scenespeak.safetext import as_path, load_json, read_text
+
+    p = as_path(path)
+    if not p.exists() and not p.is_symlink():
+        raise InputError(p, "no such file (save one with `describe --format json`)")
+    text = read_text(p, what="JSON file (a describe output)")
     try:
-        data = json.loads(p.read_text(encoding="utf-8"))
-    except FileNotFoundError as exc:
-        raise InputError(p, "no such file (save one with `describe --format json`)") from exc
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise InputError(p, f"cannot be read as JSON ({exc})") from exc
-    except RecursionError:
-        raise InputError(p, "is nested too deeply to be a describe output") from None
+        data = load_json(text, p)
+    except InputError as exc:
+        raise InputError(p, f"cannot be read as JSON: {exc.problem}") from None
     return scene_from_dict(data, str(p))
 
 
