@@ -64,7 +64,6 @@ KNOWN: dict[tuple[str, str, str], int] = {
     ("complexity", "tools/rgbd_eval.py", "evaluate_scene"): 19,
     ("complexity", "tools/rgbd_eval.py", "summarise"): 16,
     ("lines", "pipeline_rgbd.py", ""): 703,
-    ("lines", "safeio.py", ""): 607,
     ("lines", "tools/fuzz/files.py", ""): 968,
     ("lines", "tools/sequences.py", ""): 639,
     ("parameters", "cli/annotate.py", "annotate_cmd"): 10,
