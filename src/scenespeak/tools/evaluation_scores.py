@@ -8,13 +8,14 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import asdict, dataclass, field
 from typing import Any
 
 import numpy as np
 
 from scenespeak.errors import InputError
+from scenespeak.tools.centroid_rule import score_point_pairs
 from scenespeak.tools.evaluation_match import (
     is_known,
     match_objects,
@@ -97,6 +98,9 @@ class SceneScore:
     centroid_clear_correct: int = 0
     centroid_ambiguous_correct: int = 0
     by_tag: Mapping[str, list[int]] = field(default_factory=dict)
+    #: The same against the second truth, the point pairs of the true footprints
+    #: (``centroid_rule.score_point_pairs``): per tag ``[forces right, centroid right, pairs]``.
+    by_tag_point_pairs: Mapping[str, list[int]] = field(default_factory=dict)
 
     false_known: int = 0
     surrounded_apart: int = 0
@@ -176,6 +180,9 @@ def score_scene(pred: PredictedScene, truth: SceneTruth) -> SceneScore:
         centroid_clear_correct=cen_clear,
         centroid_ambiguous_correct=cen_ambiguous,
         by_tag=by_tag,
+        by_tag_point_pairs=score_point_pairs(
+            pred.relations, pred.centroid_relations, truth.relations
+        ),
     )
 
 
@@ -188,6 +195,17 @@ def _pair_counts(names: Sequence[str], said: Mapping[tuple[str, str], Any]) -> t
 def _false_known(pred: PredictedScene, matched: Mapping[str, str]) -> int:
     """Described objects with a known label that match no true object."""
     return sum(1 for n in unmatched(pred, matched) if is_known(pred.label_of(n)))
+
+
+def _tag_totals(per_scene: Iterable[Mapping[str, Sequence[int]]]) -> dict[str, dict[str, int]]:
+    """Sum per-scene ``tag -> [forces right, centroid right, pairs]`` into
+    ``tag -> {"forces", "centroid", "pairs"}``."""
+    tags: dict[str, list[int]] = {}
+    for by_tag in per_scene:
+        for tag, (f, c, n) in by_tag.items():
+            t = tags.setdefault(tag, [0, 0, 0])
+            t[0], t[1], t[2] = t[0] + f, t[1] + c, t[2] + n
+    return {k: {"forces": f, "centroid": c, "pairs": n} for k, (f, c, n) in tags.items()}
 
 
 def _ratio(num: int, den: int) -> float | None:
@@ -283,18 +301,13 @@ class EvaluationResult:
     def centroid_rule(self) -> dict[str, Any]:
         """The centroid-vector rule beside the forces: clear and ambiguous pairs right, and
         per tag (``elongated``, ``close``, ``partly hidden``, ``all``; clear pairs)
-        ``{"forces", "centroid", "pairs"}``."""
-        tags: dict[str, list[int]] = {}
-        for s in self.scenes:
-            for tag, (f, c, n) in s.by_tag.items():
-                t = tags.setdefault(tag, [0, 0, 0])
-                t[0], t[1], t[2] = t[0] + f, t[1] + c, t[2] + n
+        ``{"forces", "centroid", "pairs"}`` against the generator's truth (``by_tag``) and
+        against the point pairs of the true footprints (``by_tag_point_pairs``)."""
         return {
             "clear_correct": sum(s.centroid_clear_correct for s in self.scenes),
             "ambiguous_correct": sum(s.centroid_ambiguous_correct for s in self.scenes),
-            "by_tag": {
-                k: {"forces": f, "centroid": c, "pairs": n} for k, (f, c, n) in tags.items()
-            },
+            "by_tag": _tag_totals(s.by_tag for s in self.scenes),
+            "by_tag_point_pairs": _tag_totals(s.by_tag_point_pairs for s in self.scenes),
         }
 
     @classmethod

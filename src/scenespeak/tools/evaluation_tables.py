@@ -120,7 +120,7 @@ def format_table(result: EvaluationResult) -> str:
     )
     lines = [head, "", "| measure | scenespeak | paper (Luke et al. 2005) |", "| --- | --- | --- |"]
     lines += [f"| {a} | {b} | {c} |" for a, b, c in _summary_rows(result, d)]
-    lines += _tag_lines(d["centroid_rule"]["by_tag"])
+    lines += _tag_lines(d["centroid_rule"])
     found = found_by_label(result.scenes)
     if found:
         by_label = ", ".join(f"{lab} {f}/{n}" for lab, (f, n) in sorted(found.items()))
@@ -164,19 +164,28 @@ def _summary_rows(result: EvaluationResult, d: Mapping[str, Any]) -> list[tuple[
     ]  # fmt: skip
 
 
-def _tag_lines(tags: Mapping[str, Mapping[str, int]]) -> list[str]:
-    """The forces against the centroid-vector rule, per tag of the clear pairs."""
-    if not tags:
-        return []
-    lines = ["", "| clear pairs | pairs | forces right | centroid rule right |",
-             "| --- | --- | --- | --- |"]  # fmt: skip
-    for tag in ("elongated", "close", "partly hidden", "all"):
-        if tag in tags:
-            t = tags[tag]
-            lines.append(
-                f"| {tag} | {t['pairs']} | {_frac(t['forces'], t['pairs'])} | "
-                f"{_frac(t['centroid'], t['pairs'])} |"
-            )
+_TAG_TABLES = (
+    ("by_tag", "clear pairs (truth: centroid direction of the true footprints)"),
+    ("by_tag_point_pairs", "clear pairs (truth: point pairs of the true footprints)"),
+)
+
+
+def _tag_lines(rule: Mapping[str, Any]) -> list[str]:
+    """The forces against the centroid-vector rule, per tag of the clear pairs, against the
+    generator's truth and against the point pairs of the true footprints."""
+    lines: list[str] = []
+    for key, title in _TAG_TABLES:
+        tags = rule.get(key) or {}
+        if tags:
+            lines += ["", f"| {title} | pairs | forces right | centroid rule right |",
+                      "| --- | --- | --- | --- |"]  # fmt: skip
+        for tag in ("elongated", "close", "partly hidden", "all"):
+            if tag in tags:
+                t = tags[tag]
+                lines.append(
+                    f"| {tag} | {t['pairs']} | {_frac(t['forces'], t['pairs'])} | "
+                    f"{_frac(t['centroid'], t['pairs'])} |"
+                )
     return lines
 
 

@@ -69,6 +69,10 @@ class TruthRelation:
     ambiguous: bool = False
     tags: tuple[str, ...] = ()  # centroid_rule.TAGS: "elongated", "close", "partly hidden"
     overlap: bool = False  # the footprints overlap (truth reason "overlap")
+    #: The second truth, independent of the centroid rule: the direction most point pairs of
+    #: the true footprints agree on, and whether it is clear (``centroid_rule.point_pairs_truth``).
+    pairs_primary: str = ""
+    pairs_clear: bool = False
 
 
 @dataclass(frozen=True)
@@ -156,6 +160,7 @@ def load_scene_truth(scene_dir: str | PathLike[str]) -> SceneTruth:
             for o in data["objects"]
         )
         by_label = {str(o.get("name", o["label"])): o for o in data["objects"]}
+        pairs = _point_pairs(by_label, data.get("relations", []))
         relations = tuple(
             TruthRelation(
                 str(r["argument"]),
@@ -164,8 +169,9 @@ def load_scene_truth(scene_dir: str | PathLike[str]) -> SceneTruth:
                 bool(r.get("ambiguous", False)),
                 _tags(by_label, r),
                 "overlap" in r.get("reasons", ()),
+                *pairs[k],
             )
-            for r in data.get("relations", [])
+            for k, r in enumerate(data.get("relations", []))
         )
         rig = data.get("rig", {})
         pitch = float(rig.get("pitch_deg", 0.0)) if isinstance(rig, Mapping) else 0.0
@@ -183,6 +189,29 @@ def _tags(objects: Mapping[str, Any], rel: Mapping[str, Any]) -> tuple[str, ...]
 
     a, b = objects.get(str(rel["argument"])), objects.get(str(rel["referent"]))
     return () if a is None or b is None else pair_tags(a, b, rel.get("reasons", ()))
+
+
+def _point_pairs(
+    objects: Mapping[str, Any], relations: list[Mapping[str, Any]]
+) -> list[tuple[str, bool]]:
+    """Per relation, ``centroid_rule.point_pairs_truth`` (one computation per unordered pair:
+    the reverse relation has the opposite direction and the same share)."""
+    from scenespeak.tools.centroid_rule import OPPOSITE, point_pairs_truth
+
+    done: dict[tuple[str, str], tuple[str, bool]] = {}
+    out = []
+    for r in relations:
+        arg, ref = str(r["argument"]), str(r["referent"])
+        if (ref, arg) in done:
+            direction, clear = done[(ref, arg)]
+            out.append((OPPOSITE.get(direction, ""), clear))
+            continue
+        a, b = objects.get(arg), objects.get(ref)
+        reasons = r.get("reasons", ())
+        got = ("", False) if a is None or b is None else point_pairs_truth(a, b, reasons)
+        done[(arg, ref)] = got
+        out.append(got)
+    return out
 
 
 def predicted_from_description(description: Any, name: str, seconds: float = 0.0) -> PredictedScene:
