@@ -431,6 +431,8 @@ def _walk_f0_f2(
         hi_a = srt[i, 1]
         while j < b1 and srt[j, 0] + dvb < lo_a:
             j += 1
+        if j == b1:
+            break  # every B-edge starts below this A-edge, hence below the rest
         jj = j
         while jj < b1 and srt[jj, 0] + dvb < hi_a:
             x0, x2, y0_, y2 = _pair_terms(srt, i, jj, dvb, dsb)
@@ -445,6 +447,8 @@ def _walk_f0_f2(
         hi_b = srt[j, 1] + dvb
         while i < a1 and srt[i, 0] <= lo_b:
             i += 1
+        if i == a1:
+            break
         ii = i
         while ii < a1 and srt[ii, 0] < hi_b:
             x0, x2, y0_, y2 = _pair_terms(srt, ii, j, dvb, dsb)
