@@ -69,7 +69,7 @@ def depth_to_metres(
     if a.dtype == np.bool_ or a.dtype in (np.uint8, np.int8):
         raise ImageError(
             source,
-            f"is an {a.dtype} image: depth needs 16-bit integer units (PNG, millimetres with "
+            f"holds {a.dtype} values: depth needs 16-bit integer units (PNG, millimetres with "
             "--depth-scale) or 32-bit float metres (TIFF or .npy)",
         )
     if np.issubdtype(a.dtype, np.integer):
