@@ -66,6 +66,19 @@ def test_rgbd_describe_is_the_cli_json(server, live_data, capsys) -> None:
     assert text.status_code == 200 and text.text.startswith("The ")
 
 
+def test_rgbd_ask_is_the_cli_answer(server, live_data, capsys) -> None:
+    p = _paths(live_data, 5)
+    question = "where is the tin?"
+    cli = _cli(
+        ["ask", question, p["color"], "--depth", p["depth"], "--intrinsics", p["intrinsics"],
+         "--masks", p["masks"], "--labels", p["labels"]], capsys,
+    )  # fmt: skip
+    with httpx.Client(base_url=server, timeout=120) as c:
+        r = c.post("/api/ask", files=_upload(p), data={"question": question})
+    assert r.status_code == 200, r.text
+    assert r.json() == cli and r.json()["answer"].startswith("The tin is")
+
+
 def _png(a: np.ndarray) -> bytes:
     ok, buf = cv2.imencode(".png", a)
     assert ok
