@@ -24,7 +24,12 @@ MAX_COMPLEXITY = 15
 MAX_LINES = 600
 MAX_PARAMETERS = 8
 #: The scene generator may be as complex as the scenes it builds (issue 9).
-GENERATOR = ("tools/scenes.py", "tools/render.py")
+GENERATOR = (
+    "tools/scenes.py",
+    "tools/scene_layout.py",
+    "tools/scene_model.py",
+    "tools/render.py",
+)
 
 
 @dataclass(frozen=True)

@@ -30,7 +30,6 @@ KNOWN: dict[tuple[str, str, str], int] = {
     # the scene generator's public functions (one keyword per knob of the generator)
     ("parameters", "tools/scenes.py", "generate_scene"): 13,
     ("parameters", "tools/scenes.py", "generate_dataset"): 13,
-    ("lines", "tools/scenes.py", ""): 1054,
     # owned by the spatial-speed issue (16): the forces package
     ("complexity", "spatial/forces/regions.py", "_polygon_region"): 17,
     ("parameters", "spatial/forces/_sweep.py", "sweep"): 10,

@@ -22,7 +22,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from os import PathLike
 from pathlib import Path
-from typing import Any, Literal, cast
+from typing import Any, Literal
 
 import cv2
 import numpy as np
@@ -31,9 +31,6 @@ from numpy.typing import NDArray
 from scenespeak.errors import InputError
 from scenespeak.perception.calibration import ground_basis
 from scenespeak.tools.render import (
-    Camera,
-    MeshSpec,
-    cylinder_outline,
     downsample_depth,
     downsample_labels,
     render,
@@ -42,11 +39,32 @@ from scenespeak.tools.render import (
 from scenespeak.tools.scene_configs import (
     GeneratorConfig,
     as_objects,
-    config_catalogue,
-    config_choice,
     config_yaws,
     instance_names,
 )
+from scenespeak.tools.scene_layout import (
+    _poly_area,
+    _raster,
+    _sat_gap,
+    _silhouette,
+    footprint_relation,
+    sample_layout,
+)
+from scenespeak.tools.scene_model import (
+    CATALOGUE,
+    CYLINDER_VIEW_YAWS,
+    DIAGONAL_TOLERANCE_DEG,
+    FORMAT,
+    HIDDEN_THRESHOLD,
+    SUPERSAMPLE,
+    VIEW_YAWS,
+    CatalogueObject,
+    Placement,
+    Rig,
+    _size,
+    make_rig,
+)
+from scenespeak.tools.truth import SceneTruth, TruthObject, TruthRelation, load_truth
 
 __all__ = [
     "CATALOGUE",
@@ -70,428 +88,8 @@ __all__ = [
     "view_yaws",
 ]
 
-FORMAT = "scenespeak-scenes/1"
-SUPERSAMPLE = 2
-DIAGONAL_TOLERANCE_DEG = 20.0
-HIDDEN_THRESHOLD = 0.5
-CLEARANCE = 0.03
-VIEW_YAWS = (0.0, 30.0, -30.0, 180.0)
-#: Training-view yaws of cylinders: every 45° (a cylinder stands at any yaw in the scenes, and
-#: its wrapped photo is recognised only near the middle of a view, where it faces the camera).
-CYLINDER_VIEW_YAWS = (0.0, 45.0, -45.0, 90.0, -90.0, 135.0, -135.0, 180.0)
-
-
-@dataclass(frozen=True)
-class CatalogueObject:
-    """A catalogue object: label, shape (``box``, ``cylinder``, ``card``), size (w, d, h) in
-    metres (width along its front, depth, height) and a scikit-image photograph name."""
-
-    label: str
-    shape: str
-    size: tuple[float, float, float]
-    texture: str
-    #: Never learnt: appears in scenes of the ``tuning``/``validation`` configurations only.
-    distractor: bool = False
-
-
-#: The fixed catalogue: sizes of real household objects.
-CATALOGUE: tuple[CatalogueObject, ...] = (
-    CatalogueObject("box", "box", (0.19, 0.07, 0.27), "page"),  # cereal box, printed text
-    CatalogueObject("book", "box", (0.16, 0.03, 0.23), "coffee"),  # upright book
-    CatalogueObject("card", "card", (0.18, 0.012, 0.13), "chelsea"),  # photo card / frame
-    CatalogueObject("can", "cylinder", (0.066, 0.066, 0.122), "astronaut"),  # drink can
-    CatalogueObject("mug", "cylinder", (0.085, 0.085, 0.095), "immunohistochemistry"),
-    CatalogueObject("tin", "cylinder", (0.10, 0.10, 0.16), "coins"),  # coin tin
-    CatalogueObject("shoebox", "box", (0.32, 0.19, 0.11), "camera"),
-)
-
-
-@dataclass(frozen=True)
-class Rig:
-    """A parallel stereo rig in the world (Z up, floor z = 0), looking along world +Y.
-
-    ``height`` is the left camera's height above the floor, ``pitch_deg`` the downward pitch.
-    """
-
-    pitch_deg: float = 0.0
-    height: float = 0.25
-    baseline: float = 0.12
-    hfov_deg: float = 60.0
-    image_size: tuple[int, int] = (640, 480)
-
-    def camera(self, which: Literal["left", "right"] = "left") -> Camera:
-        """The left or right camera (right = left shifted by the baseline along its X axis)."""
-        a = np.radians(self.pitch_deg)
-        right = np.array([1.0, 0.0, 0.0])
-        forward = np.array([0.0, np.cos(a), -np.sin(a)])
-        down = np.array([0.0, -np.sin(a), -np.cos(a)])
-        eye = np.array([0.0, 0.0, self.height])
-        if which == "right":
-            eye = eye + self.baseline * right
-        return Camera(
-            tuple(eye), tuple(right), tuple(down), tuple(forward), self.image_size, self.hfov_deg
-        )
-
-    @property
-    def up(self) -> NDArray[np.float64]:
-        """World up in the left camera's OpenCV frame."""
-        return self.camera().rotation @ np.array([0.0, 0.0, 1.0])
-
-    def calibration(self) -> dict[str, Any]:
-        """The calibration JSON: short form for a level rig, full form for a pitched one."""
-        up = [round(float(v), 12) + 0.0 for v in self.up]
-        if self.pitch_deg == 0:
-            return {
-                "baseline": self.baseline,
-                "hfov_deg": self.hfov_deg,
-                "image_size": list(self.image_size),
-                "up": up,
-            }
-        k = self.camera().intrinsics(SUPERSAMPLE).tolist()
-        return {
-            "image_size": list(self.image_size),
-            "K_left": k,
-            "K_right": k,
-            "dist_left": [0.0] * 5,
-            "dist_right": [0.0] * 5,
-            "R": np.eye(3).tolist(),
-            "T": [-self.baseline, 0.0, 0.0],
-            "up": up,
-        }
-
-
-def make_rig(
-    pitched: bool,
-    *,
-    image_size: tuple[int, int] = (640, 480),
-    hfov_deg: float = 60.0,
-    baseline: float = 0.12,
-    pitch_deg: float = 25.0,
-) -> Rig:
-    """The level rig (0.25 m high) or the pitched rig (0.45 m high, ``pitch_deg`` down)."""
-    if pitched:
-        return Rig(pitch_deg, 0.45, baseline, hfov_deg, _size(image_size))
-    return Rig(0.0, 0.25, baseline, hfov_deg, _size(image_size))
-
-
-@dataclass(frozen=True)
-class Placement:
-    """A catalogue object placed in the world: base centre ``position`` (x, y, z) and yaw."""
-
-    obj: CatalogueObject
-    position: tuple[float, float, float]
-    yaw_deg: float
-    on: str | None = None
-
-    def footprint_world(self) -> NDArray[np.float64]:
-        """Outline of the base in world (x, y), counter-clockwise."""
-        w, d, _ = self.obj.size
-        if self.obj.shape == "cylinder":
-            local = cylinder_outline(w / 2)
-        else:
-            local = np.array([[-w / 2, -d / 2], [w / 2, -d / 2], [w / 2, d / 2], [-w / 2, d / 2]])
-        a = np.radians(self.yaw_deg)
-        rot = np.array([[np.cos(a), -np.sin(a)], [np.sin(a), np.cos(a)]])
-        return local @ rot.T + np.asarray(self.position[:2])
-
-    def corners_world(self) -> NDArray[np.float64]:
-        """Vertices of the object's (prism) hull in the world, ``(2n, 3)``."""
-        fp = self.footprint_world()
-        z0 = self.position[2]
-        z1 = z0 + self.obj.size[2]
-        return np.vstack([np.c_[fp, np.full(len(fp), z0)], np.c_[fp, np.full(len(fp), z1)]])
-
-    def centroid_world(self) -> NDArray[np.float64]:
-        """Centre of the object's volume."""
-        x, y, z = self.position
-        return np.array([x, y, z + self.obj.size[2] / 2])
-
-    def mesh(self) -> MeshSpec:
-        shape = "cylinder" if self.obj.shape == "cylinder" else "box"
-        return MeshSpec(shape, self.obj.size, self.obj.texture, self.position, self.yaw_deg)
-
-
-# --------------------------------------------------------------------------------------------
-# geometry
-
-
-def _sat_gap(a: NDArray[np.float64], b: NDArray[np.float64]) -> float:
-    """Largest separating gap between two convex polygons (negative when they overlap)."""
-    best = -np.inf
-    for poly in (a, b):
-        edges = np.roll(poly, -1, axis=0) - poly
-        normals = np.c_[edges[:, 1], -edges[:, 0]]
-        normals /= np.linalg.norm(normals, axis=1, keepdims=True)
-        pa, pb = a @ normals.T, b @ normals.T
-        gap = np.maximum(pb.min(0) - pa.max(0), pa.min(0) - pb.max(0))
-        best = max(best, float(gap.max()))
-    return best
-
-
-def _silhouette(cam: Camera, pl: Placement) -> NDArray[np.float64]:
-    """Convex silhouette of a placed object in final-image pixels."""
-    uv = cam.project(pl.corners_world(), SUPERSAMPLE).astype(np.float32)
-    return cv2.convexHull(uv).reshape(-1, 2).astype(np.float64)
-
-
-def _raster(poly: NDArray[np.float64], size: tuple[int, int], scale: float) -> NDArray[np.bool_]:
-    w, h = size
-    img = np.zeros((int(h * scale), int(w * scale)), np.uint8)
-    pts = np.round((poly + 0.5) * scale * 16 - 8).astype(np.int32)
-    cv2.fillPoly(img, [pts], 1, lineType=cv2.LINE_8, shift=4)
-    return img.astype(bool)
-
-
-def _poly_area(poly: NDArray[np.float64]) -> float:
-    x, y = poly[:, 0], poly[:, 1]
-    return 0.5 * abs(float(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1))))
-
-
-def footprint_relation(
-    argument: NDArray[np.float64], referent: NDArray[np.float64]
-) -> tuple[str, float, bool]:
-    """Ground-truth relation of two footprints in the horizontal plane's 2-D frame.
-
-    The direction of the vector from the referent's footprint centroid to the argument's gives
-    the primary direction: the nearest of 0° right, 90° behind, 180° left, 270° front. The
-    relation is ambiguous (on this count) when that direction is within ±20° of a diagonal, or
-    when the footprints overlap.
-
-    Returns
-    -------
-    primary, angle_deg, ambiguous
-
-    Examples
-    --------
-    >>> import numpy as np
-    >>> sq = np.array([[0, 0], [1, 0], [1, 1], [0, 1.0]])
-    >>> footprint_relation(sq - [3, 0], sq)[0]
-    'left'
-    >>> footprint_relation(sq + [0, 3], sq)[0]
-    'behind'
-    """
-    ca, cr = _poly_centroid(argument), _poly_centroid(referent)
-    v = ca - cr
-    angle = float(np.degrees(np.arctan2(v[1], v[0])) % 360.0)
-    names = ("right", "behind", "left", "front")
-    primary = names[int(np.round(angle / 90.0)) % 4]
-    off = abs(((angle - 45.0) % 90.0) - 45.0)  # distance to the nearest axis, 0..45
-    diagonal = off > 45.0 - DIAGONAL_TOLERANCE_DEG
-    overlap = _sat_gap(np.asarray(argument, float), np.asarray(referent, float)) <= 0
-    return primary, angle, bool(diagonal or overlap)
-
-
-def _poly_centroid(poly: NDArray[np.float64]) -> NDArray[np.float64]:
-    p = np.asarray(poly, float)
-    x, y = p[:, 0], p[:, 1]
-    xn, yn = np.roll(x, -1), np.roll(y, -1)
-    cross = x * yn - xn * y
-    a = cross.sum() / 2
-    if abs(a) < 1e-15:
-        return p.mean(axis=0)
-    return np.array([((x + xn) * cross).sum(), ((y + yn) * cross).sum()]) / (6 * a)
-
-
-# --------------------------------------------------------------------------------------------
-# layouts
-
-
-def sample_layout(
-    seed: int | Sequence[int],
-    rig: Rig,
-    *,
-    catalogue: Sequence[CatalogueObject] | GeneratorConfig = CATALOGUE,
-    n_objects: int | None = None,
-    stacked: bool = False,
-    distance_range: tuple[float, float] = (0.5, 2.0),
-    min_visible: float = 0.6,
-    max_tries: int = 4000,
-) -> tuple[Placement, ...]:
-    """Random layout of 3-5 distinct catalogue objects on the floor, fixed by ``seed``.
-
-    Objects stand on the floor (one may stand on another when ``stacked``), their centroids
-    ``distance_range`` metres from the left camera, footprints at least 3 cm apart, wholly
-    inside both images, and each at least ``min_visible`` unoccluded (estimated from the
-    silhouettes in depth order). ``catalogue`` may be a ``GeneratorConfig`` (its own mix).
-    """
-    rng = np.random.default_rng(seed)
-    config = catalogue if isinstance(catalogue, GeneratorConfig) else None
-    objects: Sequence[CatalogueObject] = (
-        config_catalogue(config)
-        if config is not None
-        else cast(Sequence[CatalogueObject], catalogue)
-    )
-    if config is not None:
-        min_visible = config.min_visible
-        lo, hi = config.n_objects
-        n_objects = int(rng.integers(lo, hi + 1))
-    n = int(n_objects) if n_objects is not None else int(rng.integers(3, 6))
-    if config is None and not 1 <= n <= len(objects):
-        raise InputError("n_objects", f"must be between 1 and {len(objects)}, got {n}")
-    left, right = rig.camera("left"), rig.camera("right")
-    w, h = rig.image_size
-    half = np.tan(np.radians(rig.hfov_deg) / 2)
-    for _ in range(50):
-        if config is not None:
-            chosen = config_choice(rng, config, objects, n)
-        else:
-            chosen = [objects[i] for i in rng.choice(len(objects), n, replace=False)]
-        placed: list[Placement] = []
-        top: CatalogueObject | None = None
-        if stacked and n >= 2:
-            top = chosen[-1]
-            chosen = chosen[:-1]
-        for obj in chosen:
-            for _t in range(max_tries // 50):
-                y = rng.uniform(0.3, distance_range[1])
-                x = rng.uniform(-half * y, half * y)
-                yaw = rng.uniform(0, 360) if obj.shape == "cylinder" else rng.uniform(-35.0, 35.0)
-                pl = Placement(obj, (float(x), float(y), 0.0), float(yaw))
-                if _fits(pl, placed, left, right, rig, distance_range):
-                    placed.append(pl)
-                    break
-            else:
-                break
-        if len(placed) != len(chosen):
-            continue
-        if top is not None:
-            bases = [
-                b
-                for b in placed
-                if b.obj.shape != "card"
-                and _sat_gap(
-                    Placement(top, (*b.position[:2], 0.0), 0.0).footprint_world(),
-                    _shrink(b.footprint_world(), 0.005),
-                )
-                < -min(top.size[0], top.size[1]) * 0.999
-            ]
-            if not bases:
-                continue
-            base = bases[int(rng.integers(len(bases)))]
-            pl = Placement(
-                top,
-                (base.position[0], base.position[1], base.obj.size[2]),
-                float(rng.uniform(0, 360) if top.shape == "cylinder" else base.yaw_deg),
-                on=base.obj.label,
-            )
-            if not _in_view(pl, left, right, w, h):
-                continue
-            placed.append(pl)
-        if min(_visible_estimate(placed, left, rig.image_size)) >= min_visible:
-            return tuple(placed)
-    raise InputError(f"seed {seed}", "no layout found; use fewer objects or a wider range")
-
-
-def _shrink(poly: NDArray[np.float64], by: float) -> NDArray[np.float64]:
-    c = poly.mean(axis=0)
-    d = poly - c
-    r = np.linalg.norm(d, axis=1, keepdims=True)
-    return c + d * np.maximum(r - by, 0) / r
-
-
-def _in_view(pl: Placement, left: Camera, right: Camera, w: int, h: int) -> bool:
-    for cam in (left, right):
-        if (cam.to_camera(pl.corners_world())[:, 2] < 0.1).any():
-            return False
-        uv = cam.project(pl.corners_world(), SUPERSAMPLE)
-        if uv.min() < 2 or (uv[:, 0] > w - 3).any() or (uv[:, 1] > h - 3).any():
-            return False
-    return True
-
-
-def _fits(
-    pl: Placement,
-    placed: Sequence[Placement],
-    left: Camera,
-    right: Camera,
-    rig: Rig,
-    distance_range: tuple[float, float],
-) -> bool:
-    dist = float(np.linalg.norm(left.to_camera(pl.centroid_world()[None])[0]))
-    if not distance_range[0] <= dist <= distance_range[1]:
-        return False
-    if not _in_view(pl, left, right, *rig.image_size):
-        return False
-    fp = pl.footprint_world()
-    return all(_sat_gap(fp, q.footprint_world()) >= CLEARANCE for q in placed)
-
-
-def _visible_estimate(
-    placed: Sequence[Placement], cam: Camera, size: tuple[int, int]
-) -> list[float]:
-    scale = 0.25
-    masks = [_raster(_silhouette(cam, p), size, scale) for p in placed]
-    depth = [float(cam.to_camera(p.centroid_world()[None])[0, 2]) for p in placed]
-    out = []
-    for i, m in enumerate(masks):
-        cover = np.zeros_like(m)
-        for j, mj in enumerate(masks):
-            if depth[j] < depth[i] and placed[i].on != placed[j].obj.label:
-                cover |= mj
-        total = max(int(m.sum()), 1)
-        out.append(float((m & ~cover).sum()) / total)
-    return out
-
-
 # --------------------------------------------------------------------------------------------
 # ground truth
-
-
-@dataclass(frozen=True)
-class TruthObject:
-    """One object of ``truth.json`` (see ``docs/scenes.md``)."""
-
-    label: str
-    centroid: tuple[float, float, float]
-    footprint: tuple[tuple[float, float], ...]
-    distance: float
-    visible_fraction: float
-    index: int = 0
-    shape: str = ""
-    size: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    on: str | None = None
-
-
-@dataclass(frozen=True)
-class TruthRelation:
-    """One ordered pair of ``truth.json``."""
-
-    argument: str
-    referent: str
-    primary: str
-    ambiguous: bool
-    angle_deg: float = float("nan")
-    reasons: tuple[str, ...] = ()
-
-
-@dataclass(frozen=True)
-class SceneTruth:
-    """The ground truth of one scene, mirroring ``truth.json``."""
-
-    scene_dir: Path
-    objects: tuple[TruthObject, ...]
-    relations: tuple[TruthRelation, ...]
-    rig: dict[str, Any] = field(default_factory=dict)
-    legend: dict[int, str] = field(default_factory=dict)
-
-    @property
-    def left(self) -> Path:
-        return self.scene_dir / "left.png"
-
-    @property
-    def right(self) -> Path:
-        return self.scene_dir / "right.png"
-
-    @property
-    def calib(self) -> Path:
-        return self.scene_dir / "calib.json"
-
-    def object(self, label: str) -> TruthObject:
-        """The object called ``label``."""
-        for o in self.objects:
-            if o.label == label:
-                return o
-        raise KeyError(label)
 
 
 def _truth_dict(placed: Sequence[Placement], rig: Rig, seg: NDArray[np.int32]) -> dict[str, Any]:
@@ -994,61 +592,3 @@ def load_dataset(dataset_dir: str | PathLike[str]) -> Dataset:
         root / str(s) for s in meta.get("scenes", []) if (root / str(s) / "truth.json").exists()
     )
     return Dataset(root, int(meta.get("seed", 0)), objects, scenes, meta)
-
-
-def _size(image_size: Sequence[int]) -> tuple[int, int]:
-    w, h = image_size
-    return int(w), int(h)
-
-
-def _xyz(values: Sequence[float]) -> tuple[float, float, float]:
-    x, y, z = values
-    return float(x), float(y), float(z)
-
-
-def load_truth(scene_dir: str | PathLike[str]) -> SceneTruth:
-    """Read ``scene_dir/truth.json`` into a :class:`SceneTruth`.
-
-    Raises
-    ------
-    InputError
-        If the file is missing, not JSON, or lacks required fields.
-    """
-    d = Path(scene_dir)
-    path = d / "truth.json"
-    try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-    except FileNotFoundError as exc:
-        raise InputError(path, "missing: every scene needs a truth.json") from exc
-    except (OSError, ValueError) as exc:
-        raise InputError(path, f"cannot be read as JSON ({exc})") from exc
-    try:
-        objects = tuple(
-            TruthObject(
-                label=str(o["label"]),
-                centroid=_xyz(o["centroid"]),
-                footprint=tuple((float(a), float(b)) for a, b in o.get("footprint", [])),
-                distance=float(o.get("distance", np.linalg.norm(o["centroid"]))),
-                visible_fraction=float(o.get("visible_fraction", 1.0)),
-                index=int(o.get("index", k + 1)),
-                shape=str(o.get("shape", "")),
-                size=_xyz(o.get("size", (0, 0, 0))),
-                on=o.get("on"),
-            )
-            for k, o in enumerate(data["objects"])
-        )
-        relations = tuple(
-            TruthRelation(
-                str(r["argument"]),
-                str(r["referent"]),
-                str(r["primary"]),
-                bool(r.get("ambiguous", False)),
-                float(r.get("angle_deg", float("nan"))),
-                tuple(r.get("reasons", ())),
-            )
-            for r in data.get("relations", [])
-        )
-        legend = {int(k): str(v) for k, v in data.get("labels", {}).get("legend", {}).items()}
-    except (KeyError, TypeError, ValueError) as exc:
-        raise InputError(path, f"an object or relation lacks or mangles the field {exc}") from exc
-    return SceneTruth(d, objects, relations, dict(data.get("rig", {})), legend)
