@@ -17,6 +17,7 @@ the load. Run::
 
     python benchmarks/bench_serve.py
     python benchmarks/bench_serve.py --requests 400 --concurrency 8 --workers 2
+    python benchmarks/bench_serve.py --rgbd     # colour + depth + masks requests
 """
 
 from __future__ import annotations
@@ -51,17 +52,47 @@ def _cli_json(db: Path, calib: Path, left: Path, right: Path) -> dict:
     return json.loads(out.stdout)
 
 
+def _rgbd_files(seq, k: int) -> dict[str, Path]:
+    d = Path(seq.root) / f"{k:04d}"
+    return {
+        "color": d / "left.png",
+        "depth": d / "depth.png",
+        "masks": d / "masks.png",
+        "labels": d / "labels.json",
+        "intrinsics": Path(seq.root) / "intrinsics.json",
+    }
+
+
+def _rgbd_cli_json(files: dict[str, Path]) -> dict:
+    args = [str(files["color"])]
+    for key in ("depth", "masks", "labels", "intrinsics"):
+        args += [f"--{key}", str(files[key])]
+    out = subprocess.run(
+        [sys.executable, "-m", "scenespeak", "describe", *args, "--format", "json"],
+        check=True, capture_output=True, text=True,
+    )  # fmt: skip
+    return json.loads(out.stdout)
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--requests", type=int, default=200)
     ap.add_argument("--concurrency", type=int, default=4)
     ap.add_argument("--workers", type=int, default=2, help="the server's --workers")
     ap.add_argument("--cache", type=Path, default=DEFAULT_CACHE)
+    ap.add_argument(
+        "--rgbd", action="store_true", help="RGB-D + masks requests (color, depth, masks, ...)"
+    )
     args = ap.parse_args(argv)
     db = database(args.cache)
     seq = sequences(args.cache, (TUNING_SEEDS[0],), scripts=("appear",))[0]
     inputs = [seq.pair(k) for k in (0, 8, 16, 23)]
-    expected = [without_timings(_cli_json(db, seq.calib, a, b)) for a, b in inputs]
+    if args.rgbd:  # the same script and seed rendered with depth + masks (cache/rgbd)
+        rseq = sequences(args.cache / "rgbd", (TUNING_SEEDS[0],), scripts=("appear",))[0]
+        rgbd = [_rgbd_files(rseq, k) for k in (0, 8, 16, 23)]
+        expected = [without_timings(_rgbd_cli_json(f)) for f in rgbd]
+    else:
+        expected = [without_timings(_cli_json(db, seq.calib, a, b)) for a, b in inputs]
     port = free_port()
     base = f"http://127.0.0.1:{port}"
     server = subprocess.Popen(
@@ -82,6 +113,8 @@ def main(argv: list[str] | None = None) -> int:
         calib = ("calib.json", seq.calib.read_bytes())
         bodies = [{"left": ("left.png", a.read_bytes()), "right": ("right.png", b.read_bytes()),
                    "calib": calib} for a, b in inputs]  # fmt: skip
+        if args.rgbd:
+            bodies = [{k: (p.name, p.read_bytes()) for k, p in f.items()} for f in rgbd]
 
         def one(i: int) -> tuple[int, float, str]:
             k = i % len(inputs)
