@@ -142,7 +142,7 @@ def _ordered_relations(
     (:func:`~.batch.decide_pairs`), then each pair becomes its two :class:`Relation`.
     """
     p = len(scene.first)
-    f0, f2 = _both_orders(scene.f0), _both_orders(scene.f2)
+    back0, back2 = _half_turned(scene.f0), _half_turned(scene.f2)
     # The degrees of the reversed pair are the pair's, turned (as relations_of_pair does).
     deg0, dev0 = four_direction_degrees(scene.f0)
     deg2, dev2 = four_direction_degrees(scene.f2)
@@ -159,7 +159,7 @@ def _ordered_relations(
     decisions = decide_pairs(
         (_turned(deg0), _turned(deg2)),
         _turned(dev2),
-        sector_shares(f0),
+        np.concatenate([sector_shares(scene.f0), sector_shares(back0)]),
         (overlap, referent_overlap),
         np.tile(coverage, 2),
         t,
@@ -185,18 +185,18 @@ def _ordered_relations(
     forward: list[int] = (scene.first * (n - 1) + scene.second - 1).tolist()
     places = (forward, (scene.second * (n - 1) + scene.first).tolist())
     with _collector_paused():
-        return _build(places, words, numbers, (list(f0), list(f2)), sentence_templates(decisions))
+        histograms = (list(scene.f0) + list(back0), list(scene.f2) + list(back2))
+        return _build(places, words, numbers, histograms, sentence_templates(decisions))
 
 
-def _both_orders(h: NDArray[np.float64]) -> NDArray[np.float64]:
-    """``(2P, N)``: the pairs' histograms, then the same turned by half a turn (the reversed
-    pairs: ``PairHistograms.reversed``)."""
+def _half_turned(h: NDArray[np.float64]) -> NDArray[np.float64]:
+    """The pairs' histograms turned by half a turn: the reversed pairs'
+    (``PairHistograms.reversed``)."""
     p, nbins = h.shape
     half = nbins // 2
-    out = np.empty((2 * p, nbins))
-    out[:p] = h
-    out[p:, :half] = h[:, nbins - half :]
-    out[p:, half:] = h[:, : nbins - half]
+    out = np.empty((p, nbins))
+    out[:, :half] = h[:, nbins - half :]
+    out[:, half:] = h[:, : nbins - half]
     return out
 
 

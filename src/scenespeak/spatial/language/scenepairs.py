@@ -137,9 +137,7 @@ def _forces(
     regions = _prepared_regions(polygons, labels)
     ready = np.array([r is not None for r in regions], dtype=bool).reshape(-1)
     swept = np.flatnonzero(ready[first] & ready[second])
-    f0 = np.empty((len(first), directions))
-    f2 = np.empty((len(first), directions))
-    hybrid = np.ones(len(first), dtype=bool)
+    got = None
     if swept.size:
         # Regions that failed to prepare are None: only the others go to the sweep.
         slot = np.cumsum(ready) - 1
@@ -149,6 +147,14 @@ def _forces(
             directions,
             try_f2=(~intersecting[swept]).tolist(),
         )
+        if swept.size == len(first):  # every pair swept (the usual case): no copy
+            # C-ordered rows: the row sums of the rule base are then those of 1-D arrays.
+            f0, f2 = np.ascontiguousarray(got.f0), np.ascontiguousarray(got.f2)
+            return f0, f2, np.asarray(got.hybrid, dtype=bool)
+    f0 = np.empty((len(first), directions))
+    f2 = np.empty((len(first), directions))
+    hybrid = np.ones(len(first), dtype=bool)
+    if got is not None:
         f0[swept], f2[swept], hybrid[swept] = got.f0, got.f2, got.hybrid
     for k in np.flatnonzero(~(ready[first] & ready[second])).tolist():
         a, b = polygons[first[k]], polygons[second[k]]
