@@ -64,7 +64,6 @@ KNOWN: dict[tuple[str, str, str], int] = {
     ("complexity", "tools/rgbd_eval.py", "summarise"): 16,
     ("lines", "pipeline_rgbd.py", ""): 703,
     ("lines", "tools/fuzz/files.py", ""): 968,
-    ("lines", "tools/sequences.py", ""): 639,
     ("parameters", "cli/annotate.py", "annotate_cmd"): 10,
     ("parameters", "cli/points.py", "points_cmd"): 13,
     ("parameters", "cli/watch.py", "_source"): 9,
