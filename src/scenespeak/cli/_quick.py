@@ -3,7 +3,8 @@
 A robot's dialogue loop asks one question per process about a saved scene; the answer takes a
 few milliseconds, but importing Typer (with click and pydantic) takes several times the whole
 budget of ``ask`` (issue 16: ``ask --scene`` <= 0.3 s as a whole process). :func:`run`
-recognises exactly one shape of command line,
+recognises exactly one shape of command line (and prints the top-level ``--help`` from a cache,
+see :func:`run`),
 
     ask QUESTION --scene FILE [--format text|json] [--quiet | -q]
 
@@ -117,11 +118,89 @@ def error_line(exc: BaseException) -> str:
 
 
 def run(args: list[str]) -> int | None:
-    """Answer ``args`` if it is an ``ask --scene`` line; the exit status, or None if it is not."""
+    """Answer ``args`` if it is an ``ask --scene`` line or the top-level help; the exit status,
+    or None to use the full command line."""
+    if args in ([], ["--help"]):
+        return _help()
     line = parse_ask(args)
     if line is None:
         return None
     return contextvars.copy_context().run(_answer, line)
+
+
+# --------------------------------------------------------------------------------------------
+# The top-level help, cached: building it means building every command's click parameters
+# from their signatures (Typer evaluates every annotation), about 0.15 s of CPU on every
+# `scenespeak --help`. The text is kept in the user's cache folder under a key of everything it
+# depends on — the interpreter, Typer's installed files, the size and time of every module of
+# this folder (the commands' docstrings and options) and the terminal width click wraps to — so
+# that an edited command, another Typer or a narrower terminal renders it afresh. Any trouble
+# with the cache (unreadable, unwritable, SCENESPEAK_NO_HELP_CACHE=1) only means rendering it.
+
+
+def _help_key() -> str | None:
+    import hashlib
+    import importlib.util
+    import os
+    import shutil
+
+    spec = importlib.util.find_spec("typer")
+    if spec is None or spec.origin is None:
+        return None
+    parts = [sys.version, str(shutil.get_terminal_size().columns)]
+    for folder in (Path(spec.origin).parent, Path(__file__).parent):
+        for entry in sorted(os.scandir(folder), key=lambda e: e.name):
+            if entry.name.endswith(".py"):
+                st = entry.stat()
+                parts.append(f"{entry.path}:{st.st_size}:{st.st_mtime_ns}")
+    return hashlib.sha256("\n".join(parts).encode()).hexdigest()[:32]
+
+
+def _help_file() -> Path | None:
+    import os
+
+    if os.environ.get("SCENESPEAK_NO_HELP_CACHE"):
+        return None
+    key = _help_key()
+    if key is None:
+        return None
+    base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
+    return Path(base) / "scenespeak" / f"help-{key}.txt"
+
+
+def _help() -> int | None:
+    """Print the cached top-level help (or render, print and cache it); None: use the full CLI."""
+    try:
+        cache = _help_file()
+        if cache is None:
+            return None
+        if cache.is_file():
+            sys.stdout.write(cache.read_text(encoding="utf-8"))
+            return 0
+    except (OSError, UnicodeError, ValueError):
+        return None
+    return _render_help(cache)
+
+
+def _render_help(cache: Path) -> int:
+    import contextlib
+    import io
+    import os
+
+    from scenespeak.cli import _full
+
+    out = io.StringIO()
+    with contextlib.redirect_stdout(out):
+        status = _full.main(["--help"])
+    text = out.getvalue()
+    sys.stdout.write(text)
+    if status == 0 and text:
+        with contextlib.suppress(OSError):
+            cache.parent.mkdir(parents=True, exist_ok=True)
+            tmp = cache.with_name(f"{cache.name}.{os.getpid()}.tmp")
+            tmp.write_text(text, encoding="utf-8")
+            os.replace(tmp, cache)
+    return status
 
 
 def _answer(line: AskLine) -> int:
