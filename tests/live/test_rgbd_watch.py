@@ -85,6 +85,18 @@ def test_bad_rgbd_sources_are_one_line_errors(extra, message, capsys) -> None:
     assert message in err and len(err.strip().splitlines()) == 1
 
 
+def test_rgbd_frames_without_masks_need_the_database(live_data, tmp_path, capsys) -> None:
+    d = _copy_frames(live_data.sequence, tmp_path / "seq", 3)
+    for k in range(3):
+        (d / f"{k:04d}" / "masks.png").unlink()
+    code, lines, err = _run(["watch", "--rgbd", d], capsys)
+    assert code == 2 and not lines and "--db" in err and len(err.strip().splitlines()) == 1
+    code, lines, err = _run(["watch", "--rgbd", d, "--db", live_data.db], capsys)
+    assert code == 0, err
+    assert len(lines) == 3 and all(o["source"] == "database" for o in lines[0]["objects"])
+    assert lines[0]["reason"] == "database" and lines[0]["objects"]
+
+
 def test_rgbd_folder_without_intrinsics(live_data, tmp_path, capsys) -> None:
     d = _copy_frames(live_data.sequence, tmp_path / "seq", 2)
     (d / "intrinsics.json").unlink()

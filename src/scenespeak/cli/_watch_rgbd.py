@@ -3,6 +3,7 @@
 
 from __future__ import annotations
 
+import itertools
 import json
 import sys
 from collections.abc import Iterator
@@ -80,12 +81,31 @@ def _items(w: RGBDWatch) -> Iterator[Any]:
     )
 
 
+def _first_checked(items: Iterator[Any], db: Path | None) -> Iterator[Any]:
+    """The frames, after refusing (one line, before any output) a stream whose first readable
+    frame has no masks while there is no database to recognise the objects."""
+    from scenespeak.live.rgbd_sources import RGBDFrame
+
+    head: list[Any] = []
+    for item in items:
+        head.append(item)
+        if isinstance(item, RGBDFrame):
+            if item.masks is None and db is None:
+                raise InputError(
+                    item.source,
+                    "has no masks (masks.png + labels.json, or --masks-topic): give them, or "
+                    "--db to recognise the objects",
+                )
+            break
+    return itertools.chain(head, items)
+
+
 def watch_rgbd(w: RGBDWatch, db: Path | None) -> None:
     """Run the RGB-D stream and print one JSON line per frame (broken frames: stderr)."""
     from scenespeak.live.rgbd_stream import RGBDStream
     from scenespeak.live.sources import BrokenFrame
 
-    items = _items(w)
+    items = _first_checked(_items(w), db)
     cam = _intrinsics(w)
     database = None
     if db is not None:
