@@ -30,12 +30,14 @@ scenespeak.errors.InputError: x.json: nesting is 100 levels deep, which is over 
 
 from __future__ import annotations
 
+import contextlib
 import math
 import os
 import re
 import struct
 import tempfile
 import threading
+from collections.abc import Iterator
 from os import PathLike
 from pathlib import Path
 from typing import Any
@@ -58,6 +60,7 @@ from scenespeak.safetext import (
 
 __all__ = [
     "as_path",
+    "captured_stderr",
     "check_label",
     "check_xml",
     "clean_text",
@@ -399,6 +402,31 @@ def quiet_opencv() -> None:
         cv2.utils.logging.setLogLevel(cv2.utils.logging.LOG_LEVEL_SILENT)
     except AttributeError:  # pragma: no cover - very old OpenCV
         getattr(cv2, "setLogLevel", lambda level: None)(0)
+
+
+@contextlib.contextmanager
+def captured_stderr() -> Iterator[list[str]]:
+    """Capture what C libraries (FFmpeg, libpng, OpenCV) write to the process's stderr.
+
+    Yields a list that holds the captured text (at most 4 KiB) when the block ends, so the
+    caller can say it once, in its own words, instead of the libraries' lines before its own.
+
+    >>> with captured_stderr() as noise:
+    ...     _ = os.write(2, b"[mov @ 0x1] moov atom not found")
+    >>> noise
+    ['[mov @ 0x1] moov atom not found']
+    """
+    noise: list[str] = []
+    with _FD_LOCK, tempfile.TemporaryFile() as capture:
+        saved = os.dup(2)
+        try:
+            os.dup2(capture.fileno(), 2)
+            yield noise
+        finally:
+            os.dup2(saved, 2)
+            os.close(saved)
+            capture.seek(0)
+            noise.append(capture.read(4096).decode("utf-8", "replace"))
 
 
 def decode_image(

@@ -38,7 +38,7 @@ from scenespeak import limits as _limits
 from scenespeak.cleantext import clean_text
 from scenespeak.errors import InputError
 
-__all__ = ["as_path", "load_json", "read_bytes", "read_text"]
+__all__ = ["as_path", "check_output", "load_json", "read_bytes", "read_text"]
 
 ErrorType = type[InputError]
 _BRACKETS = re.compile(r"[\[\]{}]")
@@ -243,3 +243,31 @@ def load_json(text: str, source: str | PathLike[str], *, error: ErrorType = Inpu
         raise
     except ValueError as exc:  # Python's own int-digits limit, surrogates, …
         raise error(source, f"is not valid JSON ({clean_text(str(exc))[:120]})") from None
+
+
+def check_output(path: object, *, error: ErrorType = InputError, what: str = "file") -> Path:
+    """``path`` as a place a new file may be written (by a temporary file and a rename).
+
+    Refused: a missing folder, and a name that exists as anything but a regular file or a
+    symbolic link — a folder, a FIFO, a socket or a device. A rename over ``/dev/full`` would
+    replace the device itself (as root): never. A symbolic link is replaced, not written
+    through.
+
+    >>> check_output("/dev/null")
+    Traceback (most recent call last):
+    ...
+    scenespeak.errors.InputError: /dev/null: is a device, not a regular file; give a file name
+    """
+    p = as_path(path, error=error)
+    try:
+        st = os.lstat(p)
+    except FileNotFoundError:
+        st = None
+    except OSError as exc:
+        raise error(p, _os_problem(exc)) from None
+    if st is not None and not (stat.S_ISREG(st.st_mode) or stat.S_ISLNK(st.st_mode)):
+        problem = _kind_of(st.st_mode) or "is not a regular file"
+        raise error(p, problem.split(":")[0] + f"; give a {what} name")
+    if not p.parent.is_dir():
+        raise error(p, f"the folder {str(p.parent)!r} does not exist")
+    return p

@@ -104,9 +104,13 @@ class ObjectTracker:
         timings: dict[str, float] = {}
         gl, gr = _gray(left), _gray(right)
         h, w = gl.shape
-        if self._size is not None and self._size != (w, h):
-            from scenespeak.errors import ImageError
+        from scenespeak.errors import ImageError
 
+        if gr.shape != gl.shape:  # checked before optical flow, which would assert in OpenCV
+            raise ImageError(
+                "frame", f"the right image is {gr.shape[1]}x{gr.shape[0]}, the left {w}x{h}"
+            )
+        if self._size is not None and self._size != (w, h):
             raise ImageError(
                 "frame", f"is {w}x{h}, the stream's frames are {self._size[0]}x{self._size[1]}"
             )

@@ -265,10 +265,15 @@ def annotate(
         No such dataset or no scene in it, stereo scenes and no database to use, a bad
         database, an existing ``out`` without ``resume``, a log that cannot be resumed from.
     """
+    from scenespeak.safetext import check_output
     from scenespeak.scene_folder import check_supported, find_scene_folders, scene_layout
 
     root = Path(dataset)
     scenes = find_scene_folders(root)
+    if not scenes:
+        raise InputError(root, "has no scene folders to annotate (its dataset.json lists none)")
+    if parquet is not None:  # before the work, not after it
+        check_output(parquet, what="Parquet file")
     names = [s.name for s in scenes]
     if len(set(names)) != len(names):
         raise InputError(root, "two scene folders have the same name; the output could not tell")

@@ -262,6 +262,33 @@ def _run_task(
     return results
 
 
+def _probe_scheduler(address: str) -> None:
+    """Refuse at once a ``tcp://HOST:PORT`` where nothing listens (Dask would retry for 20 s).
+
+    Other address forms (``tls://``, ``inproc://``, a scheduler file) are left to Dask.
+    """
+    import socket
+    from urllib.parse import urlsplit
+
+    from scenespeak.cleantext import clean_text
+
+    try:
+        parts = urlsplit(address if "://" in address else f"tcp://{address}")
+        host, port = parts.hostname, parts.port
+    except ValueError:
+        raise InputError("--scheduler", f"{clean_text(address)!r} is not tcp://HOST:PORT") from None
+    if parts.scheme != "tcp" or host is None or port is None:
+        return
+    try:
+        socket.create_connection((host, port), timeout=5).close()
+    except ConnectionRefusedError:
+        raise InputError(
+            "--scheduler", f"nothing listens at {clean_text(address)} (connection refused)"
+        ) from None
+    except OSError:
+        return  # unreachable or slow: Client's own timeout says so
+
+
 @contextmanager
 def open_client(options: EngineOptions) -> Iterator[Client]:
     """A Dask client: to ``options.scheduler``, or to a new local cluster that it closes."""
@@ -269,6 +296,7 @@ def open_client(options: EngineOptions) -> Iterator[Client]:
     from distributed import Client, LocalCluster
 
     if options.scheduler is not None:
+        _probe_scheduler(options.scheduler)
         try:
             client = Client(options.scheduler, timeout="20s")
         except (OSError, TimeoutError) as exc:

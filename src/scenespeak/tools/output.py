@@ -327,9 +327,9 @@ def write_parquet(
     import pyarrow as pa
     import pyarrow.parquet as pq
 
-    src, dst = Path(jsonl), Path(parquet)
-    if not dst.parent.is_dir():
-        raise InputError(dst, f"the folder {str(dst.parent)!r} does not exist")
+    from scenespeak.safetext import check_output
+
+    src, dst = Path(jsonl), check_output(parquet, what="Parquet file")  # never over a device
     tmp = dst.with_name(f".{dst.name}.partial")
     schema = _schema()
     total = 0
