@@ -23,7 +23,6 @@ from __future__ import annotations
 from os import PathLike
 from pathlib import Path
 
-import cv2
 import numpy as np
 from numpy.typing import NDArray
 
@@ -85,35 +84,67 @@ def depth_to_metres(
     return out
 
 
-def _read_tiff(p: Path) -> NDArray[np.generic]:
+def _read_tiff(p: Path, data: bytes) -> NDArray[np.generic]:
+    import io
+
+    from scenespeak.safeio import check_image_header, decode_image
+
+    check_image_header(data, p)  # the pixel count from the header, before decoding
     try:
         import tifffile
     except ImportError:  # pragma: no cover - the rgbd extra is installed in CI
-        img = cv2.imread(str(p), cv2.IMREAD_UNCHANGED)
-        if img is None:
-            raise ImageError(
-                p, "cannot be read as a TIFF (install the rgbd extra: pip install scenespeak[rgbd])"
-            ) from None
-        return np.asarray(img)
+        return np.asarray(decode_image(data, p))
     try:
-        return np.asarray(tifffile.imread(str(p)))
+        return np.asarray(tifffile.imread(io.BytesIO(data)))
     except Exception as exc:  # tifffile raises many kinds for a broken file
         raise ImageError(p, f"cannot be read as a TIFF ({exc})") from exc
 
 
+def _read_npy(p: Path, data: bytes) -> NDArray[np.generic]:
+    """A ``.npy`` array, its header (shape, dtype) checked before any allocation; no pickles."""
+    import io
+
+    from scenespeak import limits
+
+    buf = io.BytesIO(data)
+    try:
+        fmt = np.lib.format
+        version = fmt.read_magic(buf)
+        read = fmt.read_array_header_1_0 if version == (1, 0) else fmt.read_array_header_2_0
+        shape, _, dtype = read(buf)
+    except (OSError, ValueError, SyntaxError, TypeError) as exc:
+        raise ImageError(p, f"cannot be read as a NumPy .npy array ({exc})") from None
+    pixels = int(np.prod(shape[:2], dtype=np.float64)) if len(shape) >= 2 else 0
+    if pixels > limits.current().max_image_pixels or len(data) < pixels * dtype.itemsize:
+        raise ImageError(
+            p,
+            f"its header says {shape} values of {dtype}, which is over max_image_pixels or more "
+            "than the file holds (--limit max_image_pixels=N allows larger images)",
+        )
+    buf.seek(0)
+    try:
+        return np.asarray(np.load(buf, allow_pickle=False))
+    except (OSError, ValueError) as exc:
+        raise ImageError(p, f"cannot be read as a NumPy .npy array ({exc})") from None
+
+
 def _read_raw(p: Path) -> NDArray[np.generic]:
+    """The file's array: read as untrusted input (regular file, size and pixel limits, decoder
+    noise said once) by :mod:`scenespeak.safeio`."""
+    from scenespeak.safeio import decode_image, read_bytes
+
+    data = read_bytes(p, error=ImageError, what="depth image")
     suffix = p.suffix.lower()
     if suffix == ".npy":
-        try:
-            return np.asarray(np.load(str(p), allow_pickle=False))
-        except (OSError, ValueError) as exc:
-            raise ImageError(p, f"cannot be read as a NumPy .npy array ({exc})") from exc
+        return _read_npy(p, data)
     if suffix in (".tif", ".tiff"):
-        return _read_tiff(p)
-    img = cv2.imread(str(p), cv2.IMREAD_UNCHANGED)
-    if img is None:
-        raise ImageError(p, "cannot be read as an image (a 16-bit PNG, a float TIFF or .npy)")
-    return np.asarray(img)
+        return _read_tiff(p, data)
+    try:
+        return np.asarray(decode_image(data, p))
+    except ImageError as exc:
+        raise ImageError(
+            p, f"{exc.problem}; a depth image is a 16-bit PNG, a float TIFF or .npy"
+        ) from None
 
 
 def load_depth(
@@ -142,9 +173,26 @@ def load_depth(
     np.float32(1.234)
     """
     p = Path(path)
-    if not p.is_file():
-        raise ImageError(p, "no such depth file" if not p.exists() else "is not a file")
-    return depth_to_metres(_read_raw(p), scale=scale, source=str(p))
+    if not p.exists() and not p.is_symlink():
+        raise ImageError(p, "no such depth file")
+    depth = depth_to_metres(_read_raw(p), scale=scale, source=str(p))
+    _check_plausible(depth, str(p), scale)
+    return depth
+
+
+def _check_plausible(depth: NDArray[np.float32], source: str, scale: float) -> None:
+    """Refuse a depth image whose median depth no scene has (wrong units or a wrong file)."""
+    from scenespeak import limits
+
+    far = limits.current().max_scene_depth_m
+    median = float(np.nanmedian(depth))
+    if median > far:
+        raise ImageError(
+            source,
+            f"its median depth is {median:.4g} m, over max_scene_depth_m ({far:g} m): wrong "
+            f"units? (--depth-scale is {scale:g} m per unit of an integer image; float images "
+            "are in metres)",
+        )
 
 
 def check_depth_size(

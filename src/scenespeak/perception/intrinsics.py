@@ -118,10 +118,12 @@ def _number(d: Mapping[str, Any], key: str, src: str) -> float:
         raise CalibrationError(
             src, f'missing "{key}" (intrinsics need fx, fy, cx, cy, width, height)'
         )
+    if isinstance(v, bool | str | bytes):  # "277" or true: a number written wrong
+        raise CalibrationError(src, f'"{key}" must be a number, got {v!r:.40}')
     try:
         return float(v)
     except (TypeError, ValueError):
-        raise CalibrationError(src, f'"{key}" must be a number, got {v!r}') from None
+        raise CalibrationError(src, f'"{key}" must be a number, got {v!r:.40}') from None
 
 
 def _matrix(v: Any, shape: tuple[int, int], name: str, src: str) -> NDArray[np.float64]:

@@ -23,17 +23,16 @@ outside the image or of no area.
 
 from __future__ import annotations
 
-import json
 from collections.abc import Mapping
 from dataclasses import dataclass
 from os import PathLike
 from pathlib import Path
 from typing import Any
 
-import cv2
 import numpy as np
 from numpy.typing import NDArray
 
+from scenespeak.cleantext import clean_text
 from scenespeak.errors import ImageError, InputError
 
 __all__ = [
@@ -111,22 +110,25 @@ class Box:
 
 
 def _read_json(path: Path, what: str) -> Any:
-    if not path.is_file():
-        raise InputError(path, f"no such {what} file" if not path.exists() else "is not a file")
-    try:
-        return json.loads(path.read_text(encoding="utf-8"))
-    except UnicodeDecodeError:
-        raise InputError(path, f"is not a text file (expected the JSON {what})") from None
-    except ValueError as exc:
-        raise InputError(path, f"is not valid JSON ({exc})") from None
+    """Bounded, as every reader (:mod:`scenespeak.safetext`: regular file, size, nesting)."""
+    from scenespeak.safetext import load_json, read_text
+
+    if not path.exists() and not path.is_symlink():
+        raise InputError(path, f"no such {what} file")
+    return load_json(read_text(path, what=f"JSON {what} file"), path)
 
 
 def _label_value(v: Any, key: str, src: str) -> str:
     if isinstance(v, Mapping):
         v = v.get("label", v.get("name"))
     if not isinstance(v, str) or not v.strip():
-        raise InputError(src, f'instance "{key}" needs a non-empty label, got {v!r}')
-    return v.strip()
+        raise InputError(src, f'instance "{key}" needs a non-empty label, got {v!r:.40}')
+    from scenespeak.cleantext import check_label  # the labels' rules everywhere: printable
+
+    try:
+        return check_label(v, src).strip()
+    except InputError as exc:
+        raise InputError(src, f'instance "{clean_text(key)[:20]}": {exc.problem}') from None
 
 
 def labels_from_mapping(d: Any, source: str = "labels") -> dict[int, str]:
@@ -163,12 +165,15 @@ def load_instances(path: str | PathLike[str]) -> NDArray[np.int32]:
     A three-channel image whose channels are equal is read as one channel; any other colour
     image is refused (an instance image holds numbers, not colours).
     """
+    from scenespeak.safeio import decode_image, read_bytes
+
     p = Path(path)
-    if not p.is_file():
-        raise ImageError(p, "no such instance image" if not p.exists() else "is not a file")
-    img = cv2.imread(str(p), cv2.IMREAD_UNCHANGED)
-    if img is None:
-        raise ImageError(p, "cannot be read as an image (give an 8- or 16-bit PNG)")
+    if not p.exists() and not p.is_symlink():
+        raise ImageError(p, "no such instance image")
+    try:  # bounded: regular file, size, pixels from the header; decoder noise said once
+        img = decode_image(read_bytes(p, error=ImageError, what="instance image"), p)
+    except ImageError as exc:
+        raise ImageError(p, f"{exc.problem} (give an 8- or 16-bit PNG)") from None
     a = np.asarray(img)
     if a.ndim == 3:
         if (
