@@ -138,12 +138,16 @@ def _decode(data: bytes, name: str, limits: ServiceLimits) -> NDArray[np.uint8]:
             f"{name}: {w}x{h} pixels is too large (at most {limits.max_side} a side and "
             f"{limits.max_pixels} pixels)",
         )
-    img = cv2.imdecode(np.frombuffer(data, np.uint8), cv2.IMREAD_COLOR)
-    if img is None or img.size == 0:
-        raise RequestProblem(400, f"{name}: cannot be decoded (corrupt or truncated)")
+    from scenespeak.safeio import decode_image
+
+    try:  # OpenCV's and libpng's own warnings captured: the answer says it once
+        img = decode_image(data, name, flags=cv2.IMREAD_COLOR)
+    except ScenespeakError:
+        raise RequestProblem(400, f"{name}: cannot be decoded (corrupt or truncated)") from None
     if img.shape[1] != w or img.shape[0] != h:
         raise RequestProblem(400, f"{name}: decodes to a size its header does not state")
-    return np.ascontiguousarray(cv2.cvtColor(img, cv2.COLOR_BGR2RGB))
+    rgb = cv2.cvtColor(np.asarray(img, dtype=np.uint8), cv2.COLOR_BGR2RGB)
+    return np.ascontiguousarray(rgb, dtype=np.uint8)
 
 
 # --------------------------------------------------------------------------------------------
@@ -243,7 +247,8 @@ def _describe_job(
     limits: ServiceLimits,
     want_outlines: bool,
 ) -> tuple[Any, dict[str, Any]]:
-    from scenespeak.perception.calibration import load_rig
+    from scenespeak.perception.calibfiles import read_calibration as load_rig
+    from scenespeak.perception.plausibility import check_rig
     from scenespeak.pipeline import describe_scene
 
     l_img = _decode(left, "left", limits)
@@ -258,8 +263,8 @@ def _describe_job(
         with tempfile.TemporaryDirectory(prefix="scenespeak-serve-") as tmp:
             p = Path(tmp) / f"calib{suffix}"
             p.write_bytes(data)
-            try:
-                rig = load_rig(p)
+            try:  # bounded parsing (no XML entities), and a rig in mm is refused
+                rig = check_rig(load_rig(p))
             except ScenespeakError as exc:
                 raise RequestProblem(
                     400, "calib: " + str(exc).replace(str(p), "").lstrip(": ")
@@ -309,6 +314,10 @@ def create_app(  # noqa: C901 (complexity 41 > 15: to be split into route module
     from starlette.datastructures import UploadFile
 
     lim = limits or ServiceLimits()
+    import logging
+
+    for noisy in ("python_multipart", "multipart"):  # its parse warnings: our answer says it
+        logging.getLogger(noisy).setLevel(logging.ERROR)
     default_calib = Path(calib) if calib is not None else None
     if default_calib is not None:
         from scenespeak.perception.calibration import load_rig
@@ -374,7 +383,10 @@ def create_app(  # noqa: C901 (complexity 41 > 15: to be split into route module
         try:
             form = await clone.form(max_files=6, max_fields=12, max_part_size=lim.max_calib)
         except Exception as exc:  # python-multipart raises several types
-            raise RequestProblem(400, f"the multipart form cannot be parsed ({exc})") from None
+            text = str(exc)
+            if "maximum size" in text:  # which field is not said: name the ones it can be
+                text += "; a field (question, format, outlines) or calib is too large"
+            raise RequestProblem(400, f"the multipart form cannot be parsed ({text})") from None
         files: dict[str, tuple[str, bytes]] = {}
         fields: dict[str, str] = {}
         for key, value in form.multi_items():

@@ -111,10 +111,19 @@ def folder_frames(root: str | PathLike[str], *, fps: float = 30.0) -> Iterator[I
 
 
 def _open_video(path: str | PathLike[str] | int) -> Any:
-    cap = cv2.VideoCapture(path if isinstance(path, int) else str(path))
-    if not cap.isOpened():
+    from scenespeak.safeio import captured_stderr
+
+    with captured_stderr() as noise:  # FFmpeg's own "moov atom not found": said once, by us
+        cap = cv2.VideoCapture(path if isinstance(path, int) else str(path))
+        opened = cap.isOpened()
+    if not opened:
         what = f"camera {path}" if isinstance(path, int) else str(path)
-        raise InputError(what, "cannot be opened as a video (missing, or a codec OpenCV lacks)")
+        said = " ".join("".join(noise).split())[:120]
+        raise InputError(
+            what,
+            "cannot be opened as a video (missing, or a codec OpenCV lacks"
+            + (f": {said})" if said else ")"),
+        )
     return cap
 
 
