@@ -232,7 +232,7 @@ def describe_inputs(**inputs: Any) -> Any:
         calib=inputs.get("calib"),
         calib_right=inputs.get("calib_right"),
         depth=inputs.get("depth"),
-        depth_scale=float(inputs.get("depth_scale") or 0.001),
+        depth_scale=float(_default(inputs.get("depth_scale"), 0.001)),  # 0 is refused, not 1 mm
         intrinsics=inputs.get("intrinsics"),
         masks=inputs.get("masks"),
         labels=inputs.get("labels"),
@@ -316,3 +316,8 @@ def _print_description(description: Any, fmt: TextOrJson) -> None:
         _echo(json.dumps(description.to_dict()))
     else:
         _echo(description.to_text())
+
+
+def _default(value: Any, default: float) -> Any:
+    """``value`` unless it was not given (None): ``x or default`` would turn 0 into the default."""
+    return default if value is None else value
