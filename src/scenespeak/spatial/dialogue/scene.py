@@ -199,6 +199,13 @@ def _object(d: Any, k: int, source: str) -> DialogueObject:
     if not isinstance(d, Mapping) or "label" not in d or "hull" not in d:
         raise InputError(source, f"objects[{k}] needs a 'label' and a 'hull'")
     where = f"{source}: objects[{k}]"
+    from scenespeak.cleantext import check_label  # printable text, as every label
+
+    for key in ("label", "name"):
+        if d.get(key) is not None:
+            check_label(d[key], f"{where}.{key}")
+    if not isinstance(d["hull"], list | tuple):
+        raise InputError(where, f"the hull must be a list of [x, z] points, got {d['hull']!r:.40}")
     hull = tuple(_floats(p, 2, f"{where}.hull") for p in d["hull"])
     if len(hull) < 3:
         raise InputError(where, f"a hull needs at least 3 vertices, got {len(hull)}")
