@@ -121,6 +121,11 @@ def test_corpus_is_large_and_covers_every_family(corpus: tuple[Path, list[Case]]
         "truth",
         "options",
         "api",
+        "rgbd",
+        "watch",
+        "annotate",
+        "ask",
+        "serve",
     } <= families
     assert len({c.id for c in cases}) == len(cases)
 

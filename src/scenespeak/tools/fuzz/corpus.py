@@ -277,12 +277,15 @@ def keeps_labels(path: Path, labels: tuple[str, ...]) -> Checker:
 
 def families() -> Iterator[Callable[[Writer, Base], None]]:
     """Every family's builder, in order."""
-    from scenespeak.tools.fuzz import apicases, dbcases, files, options
+    from scenespeak.tools.fuzz import apicases, dbcases, files, jobs, options, service, streams
 
     yield from files.BUILDERS
     yield from dbcases.BUILDERS
     yield from options.BUILDERS
     yield from apicases.BUILDERS
+    yield from streams.BUILDERS
+    yield from jobs.BUILDERS
+    yield from service.BUILDERS
 
 
 def build(root: str | os.PathLike[str], *, write: bool = True) -> list[Case]:
