@@ -13,8 +13,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 from matplotlib.patches import FancyArrowPatch, FancyBboxPatch
 
-GEOMETRY = "geometry/  polygons: area, convexity, clipping, exact intersection"
-PIPELINE = "pipeline.py  composes the stages (per-stage options, typed results)"
+GEOMETRY = "geometry/  polygons · frames (up, ground plane, heights) · clustering (DBSCAN)"
+PIPELINE = "pipeline.py  PipelineOptions (one options object per stage) → SceneDescription"
 ROOMS = {
     # name: (x, y, w, h, colour, lines)
     "perception": (0.2, 3.0, 6.2, 2.6, "#dbe9f6", "perception/  pixels → 3-D objects"),
@@ -36,22 +36,32 @@ ROOMS = {
         "#eeeeee",
         PIPELINE,
     ),
-    "tools": (0.2, 7.2, 7.0, 0.8, "#f6e0e6", "tools/  scene generator · evaluation · figures"),
-    "cli": (7.5, 7.2, 5.3, 0.8, "#e8e0f6", "cli/  one module per command"),
+    "tools": (
+        0.2,
+        7.2,
+        6.0,
+        0.8,
+        "#f6e0e6",
+        "tools/  generator · truth · evaluation · figures/",
+    ),
+    "live": (6.45, 7.2, 3.2, 0.8, "#dff3f3", "live/  tracker + memory"),
+    "cli": (9.9, 7.2, 2.9, 0.8, "#e8e0f6", "cli/  the commands"),
 }
 STAGES = [
-    # (x, y, text) inside the rooms, left to right = the order data flows
-    (0.5, 4.2, "calibration\nStereoRig"),
-    (1.9, 4.2, "features\nSIFT"),
-    (3.2, 4.2, "stereo\nPoints3D"),
-    (4.6, 4.2, "recognition\nLabelling"),
-    (3.2, 3.15, "objects\nSceneObject"),
+    # (x, y, text) inside the rooms, left to right = the order data flows; each stage's own
+    # options dataclass under its result
+    (0.4, 4.2, "calibration\nStereoRig"),
+    (1.75, 4.2, "features\nSIFT"),
+    (3.1, 4.2, "stereo\nStereoStage\n(StereoOptions)"),
+    (4.45, 4.2, "recognition\nLabelling\n(LabelOptions)"),
+    (3.9, 3.15, "scene_objects\nstrategy\n(StrategyOptions)"),
+    (2.4, 3.15, "objects\nSceneObject\n(ObjectOptions)"),
     (7.3, 4.2, "forces\nF0, F2"),
     (8.8, 4.2, "degrees\nof truth"),
-    (10.2, 4.2, "language\nRelation"),
+    (10.2, 4.2, "language\nRelation\n(RelationOptions)"),
     (10.2, 3.15, "summary,\nnaming"),
 ]
-FLOW = [(0, 2), (1, 2), (1, 3), (2, 4), (3, 4), (5, 6), (6, 7), (7, 8)]
+FLOW = [(0, 2), (1, 2), (1, 3), (2, 4), (3, 4), (4, 5), (6, 7), (7, 8), (8, 9)]
 
 
 def main() -> Path:
@@ -64,16 +74,16 @@ def main() -> Path:
         ax.text(x + 0.15, ty, text, va="center", fontsize=9.5, weight="bold")
     boxes = []
     for x, y, text in STAGES:
-        ax.add_patch(FancyBboxPatch((x, y), 1.15, 0.8, boxstyle="round,pad=0.04", fc="white"))
-        ax.text(x + 0.575, y + 0.4, text, ha="center", va="center", fontsize=8)
-        boxes.append((x + 0.575, y + 0.4))
+        ax.add_patch(FancyBboxPatch((x, y), 1.2, 0.8, boxstyle="round,pad=0.04", fc="white"))
+        ax.text(x + 0.6, y + 0.4, text, ha="center", va="center", fontsize=6.5)
+        boxes.append((x + 0.6, y + 0.4))
     for a, b in FLOW:
         ax.add_patch(
             FancyArrowPatch(boxes[a], boxes[b], arrowstyle="-|>", mutation_scale=12,
                             shrinkA=22, shrinkB=22, color="#333333")
         )  # fmt: skip
     # the one crossing between the halves: SceneObject → SpatialObject → forces
-    obj, forces = boxes[4], boxes[5]
+    obj, forces = boxes[5], boxes[6]
     contract = (6.7, 2.2)
     for p, q in ((obj, contract), (contract, forces)):
         ax.add_patch(

@@ -37,7 +37,6 @@ KNOWN: dict[tuple[str, str, str], int] = {
     ("lines", "perception/stereo.py", ""): 1063,
     ("lines", "perception/calibration.py", ""): 900,
     ("lines", "perception/recognition/store.py", ""): 610,
-    ("complexity", "spatial/naming.py", "instance_names"): 16,
     ("parameters", "perception/stereo.py", "stereo_points"): 16,
     ("parameters", "perception/stereo.py", "match_stereo"): 14,
     ("parameters", "perception/stereo.py", "dense_disparity"): 10,

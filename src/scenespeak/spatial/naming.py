@@ -123,23 +123,28 @@ def instance_names(objects: Sequence[SpatialObject]) -> list[str]:
     for label, members in groups.items():
         if len(members) == 1 or len({names[k] for k in members}) == len(members):
             continue
-        frame = objects[members[0]].frame
-        c = centres[members]
-        words = _by_position(c, frame)
-        if words is not None:
-            new = [f"{w} {label}" for w in words]
-        else:
-            near = _by_neighbour(c, unique)
-            if near is not None:
-                new = [f"{label} near the {n}" for n in near]
-            else:
-                order = np.argsort(c[:, 0], kind="stable")
-                new = [""] * len(members)
-                for rank, k in enumerate(order):
-                    new[int(k)] = f"{_ordinal(rank)} {label} from the left"
+        new = _group_names(label, centres[members], objects[members[0]].frame, unique)
         for k, name in zip(members, new, strict=True):
             names[k] = name
     return _make_distinct(names)
+
+
+def _group_names(
+    label: str, c: NDArray[np.float64], frame: str, unique: list[tuple[str, NDArray[np.float64]]]
+) -> list[str]:
+    """Names for the instances of one label at centres ``c``: by position, by a neighbour
+    with a unique label, or by rank from the left."""
+    words = _by_position(c, frame)
+    if words is not None:
+        return [f"{w} {label}" for w in words]
+    near = _by_neighbour(c, unique)
+    if near is not None:
+        return [f"{label} near the {n}" for n in near]
+    order = np.argsort(c[:, 0], kind="stable")
+    new = [""] * len(c)
+    for rank, k in enumerate(order):
+        new[int(k)] = f"{_ordinal(rank)} {label} from the left"
+    return new
 
 
 def _make_distinct(names: list[str]) -> list[str]:
