@@ -48,8 +48,8 @@ def relate_objects(
     validated and prepared once, only hulls whose boxes meet are clipped, F0 and F2 (or F0
     and F02) come from one sweep (:func:`~.scenepairs.scene_pairs`), and the degrees of truth
     and the rule base run on arrays of all ordered pairs (:mod:`~.batch`). Memory is linear in
-    the pairs; 100 objects (9,900 ordered pairs) take a fraction of a second
-    (``benchmarks/bench_relate.py``).
+    the pairs. ``benchmarks/bench_relate.py`` times it on 10 to 100 objects (9,900 ordered
+    pairs) next to the per-pair path.
 
     Parameters
     ----------
