@@ -138,3 +138,34 @@ def test_evaluation_scores_both_truths_and_prints_both_tables(tmp_path: Path) ->
     assert "truth: centroid direction of the true footprints" in table
     assert "truth: point pairs of the true footprints" in table
     assert EvaluationResult.from_dict(result.to_dict()) == result
+
+
+def test_rules_are_scored_on_matched_objects_not_on_names(tmp_path: Path) -> None:
+    """Instances named the other way round by the chain ("box 2" where the truth has "box")
+    are matched by position first; both rules are scored on the matched pairs, as the main
+    table is."""
+    objects = [
+        {"label": "box", "name": "box", "centroid": [-0.5, 0.1, 1.0],
+         "footprint": [list(p) for p in _moved(-0.5, 1.0)]},
+        {"label": "box", "name": "box 2", "centroid": [0.5, 0.1, 1.0],
+         "footprint": [list(p) for p in _moved(0.5, 1.0)]},
+    ]  # fmt: skip
+    relations = [
+        {"argument": "box", "referent": "box 2", "primary": "left", "ambiguous": False},
+        {"argument": "box 2", "referent": "box", "primary": "right", "ambiguous": False},
+    ]
+    folder = tmp_path / "scene_000"
+    folder.mkdir()
+    (folder / "truth.json").write_text(json.dumps({"objects": objects, "relations": relations}))
+    truth = load_scene_truth(folder)
+    swapped = {"box 2": (-0.5, 0.1, 1.0), "box": (0.5, 0.1, 1.0)}  # the chain's names
+    said = {("box 2", "box"): "left", ("box", "box 2"): "right"}  # right, in its names
+    pred = PredictedScene(
+        "scene_000", swapped, said, centroid_relations=dict(said),
+        labels={"box": "box", "box 2": "box"},
+    )  # fmt: skip
+    score = score_scene(pred, truth)
+    assert (score.clear_correct, score.clear_total) == (2, 2)
+    assert score.centroid_clear_correct == 2
+    assert score.by_tag["all"] == [2, 2, 2]
+    assert score.by_tag_point_pairs["all"] == [2, 2, 2]

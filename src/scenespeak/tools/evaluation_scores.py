@@ -109,22 +109,27 @@ class SceneScore:
 
 
 def _centroid_scores(
-    pred: PredictedScene, truth: SceneTruth
+    said: Mapping[tuple[str, str], str],
+    by_centroid: Mapping[tuple[str, str], str],
+    truth: SceneTruth,
 ) -> tuple[int, int, dict[str, list[int]]]:
+    """The centroid rule's right answers (clear, ambiguous) and per tag ``[forces right,
+    centroid right, pairs]``; ``said`` and ``by_centroid`` are keyed by the TRUE names (the
+    matched objects', as ``translate_relations`` gives them)."""
     clear = ambiguous = 0
     by_tag: dict[str, list[int]] = {}
     for rel in truth.relations:
         key = (rel.argument, rel.referent)
-        if key not in pred.relations or key not in pred.centroid_relations:
+        if key not in said or key not in by_centroid:
             continue
-        right = int(pred.centroid_relations[key] == rel.primary)
+        right = int(by_centroid[key] == rel.primary)
         if rel.ambiguous:
             ambiguous += right
             continue
         clear += right
         for tag in (*rel.tags, "all"):
             t = by_tag.setdefault(tag, [0, 0, 0])
-            t[0] += int(pred.relations[key] == rel.primary)
+            t[0] += int(said[key] == rel.primary)
             t[1] += right
             t[2] += 1
     return clear, ambiguous, by_tag
@@ -155,7 +160,8 @@ def score_scene(pred: PredictedScene, truth: SceneTruth) -> SceneScore:
     clear, ambiguous, apart = tally_relations(said, truth.relations)
     found = len(errors)
     usable = pred.error is None and found == len(names) and n_described == n_pairs
-    cen_clear, cen_ambiguous, by_tag = _centroid_scores(pred, truth)
+    by_centroid = translate_relations(_CentroidView(pred.centroid_relations), matched)
+    cen_clear, cen_ambiguous, by_tag = _centroid_scores(said, by_centroid, truth)
     return SceneScore(
         name=truth.name,
         usable=usable,
@@ -180,10 +186,15 @@ def score_scene(pred: PredictedScene, truth: SceneTruth) -> SceneScore:
         centroid_clear_correct=cen_clear,
         centroid_ambiguous_correct=cen_ambiguous,
         by_tag=by_tag,
-        by_tag_point_pairs=score_point_pairs(
-            pred.relations, pred.centroid_relations, truth.relations
-        ),
+        by_tag_point_pairs=score_point_pairs(said, by_centroid, truth.relations),
     )
+
+
+@dataclass(frozen=True)
+class _CentroidView:
+    """The centroid rule's relations where ``translate_relations`` reads ``relations``."""
+
+    relations: Mapping[tuple[str, str], str]
 
 
 def _pair_counts(names: Sequence[str], said: Mapping[tuple[str, str], Any]) -> tuple[int, int]:
