@@ -125,8 +125,11 @@ class ResumableJsonl:
         self.failed = {name for name, ok in finished.items() if not ok}
         self.pairs = pairs
         flags = os.O_WRONLY | os.O_APPEND | os.O_CREAT
+        #: Made by this run (not resumed): removed again if the run fails before a scene.
+        self._new = not path.exists() and not log.exists()
         self._out = os.open(path, flags, 0o644)
         self._log = os.open(log, flags, 0o644)
+        self._wrote = False
 
     @classmethod
     def open(
@@ -209,6 +212,7 @@ class ResumableJsonl:
 
     def write(self, records: Sequence[SceneRecord]) -> None:
         """Append finished scenes: their pair lines (one fsync-ed write), then their log lines."""
+        self._wrote = True
         lines = [line for r in records if r.error is None for line in r.lines]
         if lines:
             _append(self._out, ("\n".join(lines) + "\n").encode("utf-8"))
@@ -252,6 +256,12 @@ class ResumableJsonl:
         tb: TracebackType | None,
     ) -> None:
         self.close()
+        if exc_type is not None and self._new and not self._wrote:
+            # refused before any scene (no scheduler, a bad database): leave nothing behind,
+            # so that the corrected command does not meet "already exists; pass --resume"
+            for p in (self.path, self.log):
+                if p.exists() and p.stat().st_size == 0:
+                    p.unlink()
 
 
 # --------------------------------------------------------------------------------------------
