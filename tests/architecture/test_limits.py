@@ -27,9 +27,6 @@ KNOWN: dict[tuple[str, str, str], int] = {
     ("parameters", "spatial/language/rules.py", "describe_relation"): 9,
     # a typer command: one parameter per CLI option
     ("parameters", "cli/describe.py", "describe_cmd"): 25,
-    # the scene generator's public functions (one keyword per knob of the generator)
-    ("parameters", "tools/scenes.py", "generate_scene"): 13,
-    ("parameters", "tools/scenes.py", "generate_dataset"): 13,
     # owned by the spatial-speed issue (16): the forces package
     ("complexity", "spatial/forces/regions.py", "_polygon_region"): 17,
     ("parameters", "spatial/forces/_sweep.py", "sweep"): 10,

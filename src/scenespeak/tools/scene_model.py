@@ -7,8 +7,8 @@ format and the ground-truth rule are in ``docs/scenes.md``.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
-from typing import Any, Literal
+from dataclasses import dataclass, fields, replace
+from typing import Any, Literal, TypeVar, cast
 
 import numpy as np
 from numpy.typing import NDArray
@@ -163,3 +163,83 @@ class Placement:
 def _size(image_size: Sequence[int]) -> tuple[int, int]:
     w, h = image_size
     return int(w), int(h)
+
+
+@dataclass(frozen=True)
+class SceneOptions:
+    """Knobs of one generated scene (:func:`scenespeak.tools.scenes.generate_scene`).
+
+    Attributes
+    ----------
+    pitched : bool
+        False — a level rig; True: pitched ``pitch_deg`` down.
+    image_size : (w, h)
+        (640, 480) pixels.
+    hfov_deg, baseline : float
+        60° horizontal field of view, 0.12 m baseline.
+    pitch_deg : float
+        25° — the pitched rig's angle (a configuration's ``pitch_range`` draws it per scene).
+    n_objects : int or None
+        Objects in the scene (None: 3–5 at random).
+    stacked : bool
+        Put one object on another where one fits (the paper's mug on a can).
+    catalogue : sequence of CatalogueObject
+        The objects to choose from (:data:`CATALOGUE`).
+    depth_noise : bool
+        Also write ``depth_noisy.png``, the depth as a depth camera would give it.
+    """
+
+    pitched: bool = False
+    image_size: tuple[int, int] = (640, 480)
+    hfov_deg: float = 60.0
+    baseline: float = 0.12
+    pitch_deg: float = 25.0
+    n_objects: int | None = None
+    stacked: bool = False
+    catalogue: Sequence[CatalogueObject] = CATALOGUE
+    depth_noise: bool = False
+
+
+@dataclass(frozen=True)
+class DatasetOptions:
+    """Knobs of a generated dataset (:func:`scenespeak.tools.scenes.generate_dataset`).
+
+    Attributes
+    ----------
+    pitched : bool or "mixed"
+        Level rig, rig pitched 25° down, or both alternately (odd scenes pitched).
+    image_size, hfov_deg, baseline
+        As in :class:`SceneOptions`.
+    stacked : bool
+        Put one object on another in every scene where one fits.
+    views : bool
+        True — render the training views into ``objects/<label>/``.
+    overwrite : bool
+        Replace a dataset made with other settings instead of refusing.
+    depth_noise : bool
+        Also write each scene's ``depth_noisy.png``.
+    config : str
+        ``"default"``, ``"tuning"`` or ``"validation"`` (``scene_configs.CONFIGS``; docs/scenes.md).
+    """
+
+    pitched: bool | Literal["mixed"] = False
+    image_size: tuple[int, int] = (640, 480)
+    hfov_deg: float = 60.0
+    baseline: float = 0.12
+    stacked: bool = False
+    views: bool = True
+    overwrite: bool = False
+    depth_noise: bool = False
+    config: str = "default"
+
+
+_Options = TypeVar("_Options", SceneOptions, DatasetOptions)
+
+
+def with_overrides(options: _Options, overrides: dict[str, object], what: str) -> _Options:
+    """``options`` with single fields replaced; an unknown name is refused like a keyword."""
+    names = {f.name for f in fields(options)}
+    unknown = sorted(set(overrides) - names)
+    if unknown:
+        raise TypeError(f"{what}() got unexpected keyword argument(s) {unknown}")
+    return replace(options, **cast(Any, overrides)) if overrides else options

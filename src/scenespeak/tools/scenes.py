@@ -22,7 +22,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from os import PathLike
 from pathlib import Path
-from typing import Any, Literal
+from typing import Any
 
 import cv2
 import numpy as np
@@ -59,10 +59,13 @@ from scenespeak.tools.scene_model import (
     SUPERSAMPLE,
     VIEW_YAWS,
     CatalogueObject,
+    DatasetOptions,
     Placement,
     Rig,
+    SceneOptions,
     _size,
     make_rig,
+    with_overrides,
 )
 from scenespeak.tools.truth import SceneTruth, TruthObject, TruthRelation, load_truth
 
@@ -73,8 +76,10 @@ __all__ = [
     "VIEW_YAWS",
     "CatalogueObject",
     "Dataset",
+    "DatasetOptions",
     "Placement",
     "Rig",
+    "SceneOptions",
     "SceneTruth",
     "TruthObject",
     "TruthRelation",
@@ -191,17 +196,10 @@ def generate_scene(
     scene_dir: str | PathLike[str],
     *,
     seed: int | Sequence[int] = 0,
-    pitched: bool = False,
-    image_size: tuple[int, int] = (640, 480),
-    hfov_deg: float = 60.0,
-    baseline: float = 0.12,
-    pitch_deg: float = 25.0,
-    n_objects: int | None = None,
-    stacked: bool = False,
-    catalogue: Sequence[CatalogueObject] = CATALOGUE,
+    options: SceneOptions | None = None,
     layout: Sequence[Placement] | None = None,
-    depth_noise: bool = False,
     config: GeneratorConfig | None = None,
+    **overrides: object,
 ) -> Path:
     """Render one scene into ``scene_dir`` (left/right images, calib, truth, labels).
 
@@ -215,11 +213,18 @@ def generate_scene(
     temporary sibling folder and renamed into place, so an interrupted call leaves nothing
     half-written. An existing ``scene_dir`` is replaced. ``layout`` overrides the random one.
 
+    The knobs are :class:`~scenespeak.tools.scene_model.SceneOptions` (``options``, or single
+    fields as keywords: ``pitched=True``, ``image_size=(320, 240)``, ...).
+
     Returns
     -------
     Path
         ``scene_dir``.
     """
+    o = with_overrides(options or SceneOptions(), overrides, "generate_scene")
+    pitched, image_size, hfov_deg, baseline = o.pitched, o.image_size, o.hfov_deg, o.baseline
+    pitch_deg, n_objects, stacked, catalogue = o.pitch_deg, o.n_objects, o.stacked, o.catalogue
+    depth_noise = o.depth_noise
     scene_dir = Path(scene_dir)
     if config is not None and pitched and config.pitch_range[0] != config.pitch_range[1]:
         seq = [seed] if isinstance(seed, int) else list(seed)  # the pitch: seed + [1]
@@ -406,16 +411,9 @@ def generate_dataset(
     n_scenes: int = 100,
     *,
     seed: int = 0,
-    pitched: bool | Literal["mixed"] = False,
-    image_size: tuple[int, int] = (640, 480),
-    hfov_deg: float = 60.0,
-    baseline: float = 0.12,
-    stacked: bool = False,
-    views: bool = True,
-    overwrite: bool = False,
+    options: DatasetOptions | None = None,
     progress: Callable[[int, int], Any] | None = None,
-    depth_noise: bool = False,
-    config: str = "default",
+    **overrides: object,
 ) -> Path:
     """Generate a dataset of ``n_scenes`` rendered stereo scenes with ground truth.
 
@@ -426,20 +424,12 @@ def generate_dataset(
         settings is completed (finished scenes are kept: an interrupted run resumes).
     n_scenes : int
         Number of scenes; scene ``i`` uses the seed ``[seed, i]``, independent of the others.
-    pitched : bool or "mixed"
-        Level rig, rig pitched 25° down, or both alternately (odd scenes pitched).
-    stacked : bool
-        Put one object on another in every scene where one fits (the paper's mug on a can).
-    views : bool
-        Render the training views into ``objects/<label>/``.
-    overwrite : bool
-        Replace a dataset made with other settings instead of refusing.
+    options : DatasetOptions, optional
+        Rig, stacking, training views, overwrite, depth noise, configuration
+        (:class:`~scenespeak.tools.scene_model.DatasetOptions`); single fields also as
+        keywords (``pitched="mixed"``, ``views=False``, ``config="validation"``, ...).
     progress : callable(done, total), optional
         Called after each object's views and each scene.
-    depth_noise : bool
-        Also write each scene's ``depth_noisy.png`` (see :func:`generate_scene`).
-    config : str
-        ``"default"``, ``"tuning"`` or ``"validation"`` (``scene_configs.CONFIGS``; docs/scenes.md).
 
     Raises
     ------
@@ -449,6 +439,10 @@ def generate_dataset(
     """
     from scenespeak.tools.scene_configs import CONFIGS
 
+    o = with_overrides(options or DatasetOptions(), overrides, "generate_dataset")
+    pitched, image_size, hfov_deg, baseline = o.pitched, o.image_size, o.hfov_deg, o.baseline
+    stacked, views, overwrite, depth_noise = o.stacked, o.views, o.overwrite, o.depth_noise
+    config = o.config
     out = Path(out_dir)
     if config not in CONFIGS:
         raise InputError(
