@@ -1,6 +1,7 @@
 """Start-up of the command line and of the compiled force kernel, as whole processes.
 
-* ``scenespeak --help`` (target <= 0.15 s) and ``python -c pass`` (the interpreter alone);
+* ``scenespeak --help`` (target <= 0.15 s; from the help cache, warmed first, and with the
+  cache off) and ``python -c pass`` (the interpreter alone);
 * ``scenespeak ask QUESTION --scene FILE`` for each ``--scene`` given (target <= 0.3 s; the quick
   path of ``cli/_quick.py``), and the same line through the full Typer command line
   (``scenespeak.cli._full.main``) beside it;
@@ -65,6 +66,10 @@ def main() -> None:
     cases: dict[str, tuple[list[str], dict[str, str] | None]] = {
         "python -c pass": ([py, "-c", "pass"], None),
         "scenespeak --help": ([py, "-m", "scenespeak", "--help"], None),
+        "scenespeak --help, help cache off (renders with Typer)": (
+            [py, "-m", "scenespeak", "--help"],
+            {"SCENESPEAK_NO_HELP_CACHE": "1"},
+        ),
         "first histogram, default (auto: reference for small work)": (
             [py, "-c", FIRST_HISTOGRAM],
             {"SCENESPEAK_NUMBA": "auto"},
@@ -89,6 +94,7 @@ def main() -> None:
     print(f"load average before: {' '.join(f'{x:.2f}' for x in os.getloadavg())}\n")
     times: dict[str, list[tuple[float, float]]] = {name: [] for name in cases}
     cold: list[tuple[float, float]] = []
+    run_s([py, "-m", "scenespeak", "--help"])  # the help cache is warm
     if not args.only_cli:
         run_s([py, "-c", FIRST_HISTOGRAM], {"SCENESPEAK_NUMBA": "always"})  # warm the cache
     for _ in range(args.repeat):
