@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import cv2
 import numpy as np
 from numpy.typing import NDArray
 
@@ -19,7 +20,7 @@ from scenespeak.perception.recognition.options import LabelOptions
 from scenespeak.perception.recognition.results import Detection, Labelling
 from scenespeak.perception.recognition.verify import _apply_h, _fit_view, _Keys, _small_enough
 
-__all__ = ["label_features"]
+__all__ = ["inside_polygon", "label_features"]
 
 
 @dataclass(frozen=True)
@@ -118,11 +119,19 @@ def _detect_in_view(
     )
 
 
-def _detect_object(
-    db: _Loaded, features: Features, c: _Candidates, oid: int, need: int, o: LabelOptions
+def _best_view(
+    db: _Loaded,
+    features: Features,
+    c: _Candidates,
+    sel_o: NDArray[np.bool_],
+    ids: tuple[int, int],
+    o: LabelOptions,
 ) -> Detection | None:
-    """The best view's detection of one object (most inliers), or None."""
-    sel_o = c.first_obj[c.q_idx] == oid
+    """The best view's detection of object ``ids[0]`` (most inliers) among the candidates
+    ``sel_o``, with at least ``ids[1]`` inliers, or None."""
+    oid, need = ids
+    if not sel_o.any():
+        return None
     vids, counts = np.unique(c.view[sel_o], return_counts=True)
     if counts.max() < need:
         return None
@@ -142,6 +151,69 @@ def _detect_object(
     return best
 
 
+def inside_polygon(xy: NDArray[np.float64], polygon: NDArray[np.float64]) -> NDArray[np.bool_]:
+    """Whether each point lies inside a polygon (even-odd rule, one ray per point).
+
+    >>> sq = np.array([[0.0, 0.0], [10.0, 0.0], [10.0, 10.0], [0.0, 10.0]])
+    >>> inside_polygon(np.array([[5.0, 5.0], [15.0, 5.0]]), sq).tolist()
+    [True, False]
+    """
+    pts = np.asarray(xy, dtype=np.float64).reshape(-1, 2)
+    poly = np.asarray(polygon, dtype=np.float64).reshape(-1, 2)
+    inside = np.zeros(len(pts), bool)
+    if len(poly) < 3 or not np.all(np.isfinite(poly)):
+        return inside
+    x, y = pts[:, 0:1], pts[:, 1:2]
+    x0, y0 = poly[:, 0][None, :], poly[:, 1][None, :]
+    x1, y1 = np.roll(poly[:, 0], -1)[None, :], np.roll(poly[:, 1], -1)[None, :]
+    straddle = (y0 > y) != (y1 > y)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        cross_x = x0 + (y - y0) * (x1 - x0) / (y1 - y0)
+    hits = straddle & (x < cross_x)
+    return np.asarray(hits.sum(axis=1) % 2 == 1)
+
+
+def _overlap_share(a: NDArray[np.float64], b: NDArray[np.float64]) -> float:
+    """Area of the intersection of two outlines' convex hulls over the smaller hull's area."""
+    ha = cv2.convexHull(np.asarray(a, np.float32).reshape(-1, 1, 2))
+    hb = cv2.convexHull(np.asarray(b, np.float32).reshape(-1, 1, 2))
+    smaller = min(cv2.contourArea(ha), cv2.contourArea(hb))
+    if smaller <= 0:
+        return 1.0
+    area, _ = cv2.intersectConvexConvex(ha, hb)
+    return float(area) / smaller
+
+
+def _detect_object(
+    db: _Loaded, features: Features, c: _Candidates, oid: int, need: int, o: LabelOptions
+) -> list[Detection]:
+    """Every instance of one object: the best view's detection, then again with the matches
+    inside the instances found so far taken away (Lowe 2004, sec. 7: each cluster of
+    consistent matches is one hypothesis). A further instance needs the same evidence as the
+    first and an outline that overlaps no earlier instance's by more than
+    ``instance_overlap`` (a second face or strip of the same object carried into the scene
+    lands on it, a second instance beside it)."""
+    sel_o = c.first_obj[c.q_idx] == oid
+    found: list[Detection] = []
+    q_xy = features.xy[c.q_idx]
+    while len(found) < max(o.max_instances, 1):
+        det = _best_view(db, features, c, sel_o, (oid, need), o)
+        if det is None:
+            break
+        if found and any(
+            _overlap_share(det.outline_in_scene, f.outline_in_scene) > o.instance_overlap
+            for f in found
+        ):
+            break
+        found.append(det)
+        sel_o = (
+            sel_o
+            & ~np.isin(c.q_idx, det.inliers)
+            & ~inside_polygon(q_xy, det.outline_in_scene)
+        )
+    return found
+
+
 def label_features(db: _Loaded, features: Features, o: LabelOptions) -> Labelling:
     """Label query keypoints with the loaded database's objects (:meth:`ObjectDatabase.label`)."""
     need = min(o.min_inliers, o.min_inliers_small) if o.small_area > 0 else o.min_inliers
@@ -154,9 +226,7 @@ def label_features(db: _Loaded, features: Features, o: LabelOptions) -> Labellin
     matched[c.passed] = c.first_obj[c.passed]
     found = []
     for oid in np.unique(c.first_obj[c.q_idx]).tolist():
-        det = _detect_object(db, features, c, oid, need, o)
-        if det is not None:
-            found.append(det)
+        found.extend(_detect_object(db, features, c, oid, need, o))
     found.sort(key=lambda d: -d.score)
     detections = tuple(found)
     for i, det in enumerate(detections):

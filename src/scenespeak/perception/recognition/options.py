@@ -47,6 +47,13 @@ class LabelOptions:
         8,000 px² — largest outline area for the small-detection rule (0: off). 4 under 8,000
         px² was measured on the 100-scene evaluation (366/393 objects, no false objects in
         clutter; ``docs/database.md``).
+    max_instances : int
+        4 — instances of one object looked for: after each accepted detection the matches
+        inside its outline are taken away and the object is searched again (1: one per label).
+    instance_overlap : float
+        0.25 — a further instance is accepted only if its outline's convex hull overlaps every
+        earlier instance's by at most this share of the smaller hull (else it is another face
+        or strip of an object already found, and the search stops).
     """
 
     ratio: float = 0.8
@@ -60,6 +67,8 @@ class LabelOptions:
     nprobe: int = 4
     min_inliers_small: int = 4
     small_area: float = 8000.0
+    max_instances: int = 4
+    instance_overlap: float = 0.25
 
     @classmethod
     def with_overrides(

@@ -118,7 +118,8 @@ class Labelling:
         For each query keypoint the index of its detection in ``detections``, or ``-1``
         (unknown: not matched, or not an inlier of an accepted object).
     detections : tuple of Detection
-        Recognised objects, best score first; at most one per label.
+        Recognised objects, best score first; one per instance (several of one label when
+        it is seen more than once, ``LabelOptions.max_instances``).
     matched : (N,) int32
         Before the geometric check: the database object id each keypoint passed the ratio test
         to, or ``-1``. For figures and diagnostics.
