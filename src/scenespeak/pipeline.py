@@ -321,7 +321,8 @@ def describe_scene(
             _stereo_stage, left, right, rig, opts.stereo, feats_l, future_r, (lname, rname), timings
         )
         with _timed(timings, "label"):
-            labelling: Labelling = db.label(feats_l, opts.labels)
+            # with the image, the finer search looks again where matches explain nothing
+            labelling: Labelling = db.label(feats_l, opts.labels, image=left)
         say("stereo")
         with _timed(timings, "wait"):
             stage: StereoStage = future_st.result()

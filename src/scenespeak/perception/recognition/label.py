@@ -184,6 +184,39 @@ def _overlap_share(a: NDArray[np.float64], b: NDArray[np.float64]) -> float:
     return float(area) / smaller
 
 
+def _apart(a: Detection, b: Detection, xy: NDArray[np.float64], o: LabelOptions) -> bool:
+    """Whether two detections of one object are two instances, not two faces or strips of
+    one: their outlines overlap by at most ``instance_overlap`` of the smaller, neither
+    outline holds more than ``instance_overlap`` of the other's inliers, and their inliers
+    together span more than ``instance_span`` objects (:func:`_one_span`)."""
+    if _overlap_share(a.outline_in_scene, b.outline_in_scene) > o.instance_overlap:
+        return False
+    for x, y in ((a, b), (b, a)):
+        if len(y.inliers) and (
+            inside_polygon(xy[y.inliers], x.outline_in_scene).mean() > o.instance_overlap
+        ):
+            return False
+    return not _one_span(a, b, xy, o.instance_span)
+
+
+def _one_span(a: Detection, b: Detection, xy: NDArray[np.float64], limit: float) -> bool:
+    """Whether the two detections' inliers together span no more than ``limit`` times one
+    object along the line between them: two views' halves of one curved label (each
+    training view explains the side it saw), not two objects side by side (each covered by
+    its own inliers)."""
+    pa, pb = xy[a.inliers], xy[b.inliers]
+    if not len(pa) or not len(pb):
+        return False
+    d = pb.mean(axis=0) - pa.mean(axis=0)
+    norm = float(np.hypot(*d))
+    if norm == 0.0:
+        return True
+    d = d / norm
+    both = np.concatenate([pa, pb]) @ d
+    extent = min(float(np.ptp(np.asarray(det.outline_in_scene, np.float64) @ d)) for det in (a, b))
+    return bool(float(np.ptp(both)) <= limit * extent)
+
+
 def _detect_object(
     db: _Loaded, features: Features, c: _Candidates, oid: int, need: int, o: LabelOptions
 ) -> list[Detection]:
@@ -200,17 +233,10 @@ def _detect_object(
         det = _best_view(db, features, c, sel_o, (oid, need), o)
         if det is None:
             break
-        if found and any(
-            _overlap_share(det.outline_in_scene, f.outline_in_scene) > o.instance_overlap
-            for f in found
-        ):
+        if found and not all(_apart(det, f, features.xy, o) for f in found):
             break
         found.append(det)
-        sel_o = (
-            sel_o
-            & ~np.isin(c.q_idx, det.inliers)
-            & ~inside_polygon(q_xy, det.outline_in_scene)
-        )
+        sel_o = sel_o & ~np.isin(c.q_idx, det.inliers) & ~inside_polygon(q_xy, det.outline_in_scene)
     return found
 
 

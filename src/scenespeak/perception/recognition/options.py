@@ -54,6 +54,22 @@ class LabelOptions:
         0.25 — a further instance is accepted only if its outline's convex hull overlaps every
         earlier instance's by at most this share of the smaller hull (else it is another face
         or strip of an object already found, and the search stops).
+    instance_span : float
+        1.3 — ... and only if the two detections' inliers together span more than this many
+        times one object's extent along the line between them (two training views of a
+        cylinder each explain the half they saw: side by side, but within one object).
+    finer_upscale : float
+        2 — the finer search (:mod:`~scenespeak.perception.recognition.finer`, when the
+        scene image is given to :meth:`ObjectDatabase.label`) enlarges the boxes round
+        unexplained ratio-test matches this much (1: off).
+    finer_contrast : float
+        0.02 — SIFT's contrast threshold in those boxes (half OpenCV's default).
+    finer_pad : float
+        24 px — half the side of the box round each such match (merged where they overlap).
+    finer_max_area, finer_max_boxes : float, int
+        40,000 px², 6 — larger boxes are skipped, and at most this many are searched (those
+        with most unexplained matches first): the finer look stays a small share of the
+        scene's SIFT time.
     """
 
     ratio: float = 0.8
@@ -69,6 +85,12 @@ class LabelOptions:
     small_area: float = 8000.0
     max_instances: int = 4
     instance_overlap: float = 0.25
+    instance_span: float = 1.3
+    finer_upscale: float = 2.0
+    finer_contrast: float = 0.02
+    finer_pad: float = 24.0
+    finer_max_area: float = 40000.0
+    finer_max_boxes: int = 6
 
     @classmethod
     def with_overrides(

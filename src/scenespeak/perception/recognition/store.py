@@ -272,7 +272,7 @@ class ObjectDatabase:
         *,
         replace: bool = False,
         max_features: int = 0,
-        contrast_threshold: float = 0.04,
+        contrast_threshold: float = 0.02,
         progress: Progress | None = None,
     ) -> ObjectInfo:
         """Learn an object from training images and store it, in one transaction.
@@ -293,7 +293,10 @@ class ObjectDatabase:
             Keep at most this many of the strongest keypoints per image (0: all).
         contrast_threshold : float
             SIFT's contrast threshold for the training images (see
-            :func:`scenespeak.perception.features.detect`).
+            :func:`scenespeak.perception.features.detect`). 0.02, half OpenCV's default: a
+            photo of a small object holds few keypoints, and a far view of it in a scene
+            matches only what the training view kept (on the tuning set, with the finer
+            search, 37 instead of 33 of 57 objects found; about 40 % more descriptors).
         progress : callable, optional
             Called as ``progress(stage, done, total)`` with stage ``"extract"`` (per image,
             before anything is written) and ``"store"`` (per view written).
@@ -549,7 +552,12 @@ class ObjectDatabase:
         return self._loaded.index
 
     def label(
-        self, features: Features, options: LabelOptions | None = None, **overrides: float
+        self,
+        features: Features,
+        options: LabelOptions | None = None,
+        *,
+        image: NDArray[np.generic] | None = None,
+        **overrides: float,
     ) -> Labelling:
         """Label query keypoints (of the scene's left image) with the database's objects.
 
@@ -559,6 +567,10 @@ class ObjectDatabase:
             SIFT features of the scene image (``scenespeak.perception.features.detect``).
         options : LabelOptions, optional
             The knobs (ratio test, RANSAC, small objects; defaults documented there).
+        image : ndarray, optional
+            The image ``features`` come from: with it, a finer search (enlarged boxes round
+            the matches that explain no detection, ``LabelOptions.finer_*``) also finds
+            small and far objects (:func:`~scenespeak.perception.recognition.finer.finer_search`).
         **overrides
             Single fields of :class:`LabelOptions` (``min_inliers=5``, ``small_area=0``, ...).
 
@@ -576,7 +588,12 @@ class ObjectDatabase:
         opts = LabelOptions.with_overrides(options, overrides)
         self.load(nprobe=opts.nprobe)
         assert self._loaded is not None
-        return label_features(self._loaded, features, opts)
+        labelling = label_features(self._loaded, features, opts)
+        if image is None:
+            return labelling
+        from scenespeak.perception.recognition.finer import finer_search
+
+        return finer_search(self._loaded, image, features, labelling, opts)
 
 
 def _check_magic(p: Path) -> None:
