@@ -25,8 +25,8 @@ from numpy.typing import NDArray
 
 from scenespeak.perception.features import Features, detect, to_gray
 from scenespeak.perception.recognition.label import (
+    _apart,
     _Loaded,
-    _overlap_share,
     inside_polygon,
     label_features,
 )
@@ -130,14 +130,13 @@ def _new_detection(
     lone: NDArray[np.bool_],
     o: LabelOptions,
 ) -> Detection | None:
-    """A crop's detection in scene terms, or None when it lands on one already made (or has
-    no scene keypoint to stand for it)."""
+    """A crop's detection in scene terms, or None when it is no instance apart from one
+    already made (``_apart``: the other half of a curved label is no second object)."""
+    new = dataclasses.replace(det, inliers=_scene_inliers(det, crop, features, lone))
     for f in found:
-        if f.label == det.label and (
-            _overlap_share(det.outline_in_scene, f.outline_in_scene) > o.instance_overlap
-        ):
+        if f.label == det.label and not _apart(new, f, features.xy, o):
             return None
-    return dataclasses.replace(det, inliers=_scene_inliers(det, crop, features, lone))
+    return new
 
 
 def finer_search(

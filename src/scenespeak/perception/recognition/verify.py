@@ -28,9 +28,6 @@ RANSAC_CONFIDENCE = 0.999
 #: The similarity replaces a homography only with this many times its inliers: a looser
 #: model that explains about as many matches is no better evidence.
 SIMILARITY_MARGIN = 1.2
-#: The cylinder model (8 parameters, a looser family than a homography on few matches)
-#: replaces a plane model only with this many times its inliers.
-CYLINDER_MARGIN = 1.5
 #: A plausible view is stretched at most this much in one direction relative to the other
 #: (ratio of the singular values of the Jacobian at the matches' centre).
 MAX_ANISOTROPY = 8.0
@@ -204,139 +201,6 @@ def _fit_similarity(
     return _Fit(h, _consistent(h, train, query, o), "similarity")
 
 
-#: RANSAC hypotheses of the cylinder model (4 matches each, solved all at once).
-CYLINDER_HYPOTHESES = 300
-#: Training points this close to the silhouette's edge (share of the radius) are clipped there.
-CYLINDER_EDGE = 0.97
-
-
-def _cylinder_frame(outline: NDArray[np.float32]) -> tuple[float, float] | None:
-    """The axis column and radius (pixels) of an upright cylinder whose silhouette is
-    ``outline``; None when the outline is the image border (no mask: no silhouette)."""
-    o = np.asarray(outline, dtype=np.float64)
-    if len(o) < 3 or (len(o) == 4 and float(o.min()) == -0.5):
-        return None
-    x0, x1 = float(o[:, 0].min()), float(o[:, 0].max())
-    if x1 - x0 < 4.0:
-        return None
-    return 0.5 * (x0 + x1), 0.5 * (x1 - x0)
-
-
-def _lift(xy: NDArray[np.float64], frame: tuple[float, float]) -> NDArray[np.float64]:
-    """Training pixels lifted onto the cylinder, as the design rows ``[1, X, Z, Y]`` of an
-    affine camera: ``X = R sin φ``, ``Z = R cos φ`` with ``sin φ = (x - c) / R``, ``Y = y``."""
-    c, r = frame
-    u = np.clip((xy[:, 0] - c) / r, -CYLINDER_EDGE, CYLINDER_EDGE)
-    return np.column_stack([np.ones(len(xy)), r * u, r * np.sqrt(1.0 - u * u), xy[:, 1]])
-
-
-def cylinder_map(
-    params: NDArray[np.float64], xy: NDArray[np.float64], frame: tuple[float, float]
-) -> NDArray[np.float64]:
-    """Training pixels → scene pixels under a cylinder model (see :func:`_fit_cylinder`).
-
-    >>> p = np.array([[10.0, 20.0], [1.0, 0.0], [0.0, 0.0], [0.0, 1.0]])
-    >>> cylinder_map(p, np.array([[50.0, 5.0]]), (50.0, 10.0)).tolist()
-    [[10.0, 25.0]]
-    """
-    return _lift(np.asarray(xy, dtype=np.float64), frame) @ params
-
-
-def _cylinder_jacobians(
-    params: NDArray[np.float64], xy: NDArray[np.float64], frame: tuple[float, float]
-) -> tuple[NDArray[np.float64], ...]:
-    """Per-point 2×2 Jacobians (j00, j01, j10, j11) of :func:`cylinder_map`."""
-    c, r = frame
-    u = np.clip((xy[:, 0] - c) / r, -CYLINDER_EDGE, CYLINDER_EDGE)
-    dz = -u / np.sqrt(1.0 - u * u)  # d(R cos φ)/dx; d(R sin φ)/dx = 1
-    j00 = params[1, 0] + params[2, 0] * dz
-    j10 = params[1, 1] + params[2, 1] * dz
-    return j00, params[3, 0] + 0.0 * u, j10, params[3, 1] + 0.0 * u
-
-
-def _cylinder_consistent(
-    params: NDArray[np.float64],
-    frame: tuple[float, float],
-    train: _Keys,
-    query: _Keys,
-    o: LabelOptions,
-) -> NDArray[np.bool_]:
-    """Matches that agree with the cylinder model in position, keypoint scale and orientation
-    (the same tests as :func:`_consistent`, with the model's local Jacobian)."""
-    proj = cylinder_map(params, train.xy, frame)
-    ok = np.linalg.norm(proj - query.xy, axis=1) <= o.ransac_threshold
-    j00, j01, j10, j11 = _cylinder_jacobians(params, train.xy, frame)
-    det = j00 * j11 - j01 * j10
-    ok &= det > 0
-    with np.errstate(invalid="ignore", divide="ignore"):
-        ratio = (query.size / np.maximum(train.size, 1e-6)) / np.sqrt(np.abs(det))
-        ok &= np.abs(np.log(ratio)) <= math.log(o.max_scale_ratio)
-    rot = np.degrees(np.arctan2(j10 - j01, j00 + j11))
-    dang = (query.angle.astype(np.float64) - train.angle - rot + 180.0) % 360.0 - 180.0
-    ok &= np.abs(dang) <= o.max_angle_deg
-    return ok & np.isfinite(ratio)
-
-
-def _cylinder_hypotheses(
-    design: NDArray[np.float64], target: NDArray[np.float64], rng: np.random.Generator
-) -> NDArray[np.float64]:
-    """RANSAC hypotheses: the model through 4 random matches, ``(k, 4, 2)`` (all at once)."""
-    n = len(design)
-    keys = rng.random((CYLINDER_HYPOTHESES, n))
-    pick = np.argsort(keys, axis=1)[:, :4]
-    a = design[pick]  # (k, 4, 4)
-    b = target[pick]  # (k, 4, 2)
-    good = np.abs(np.linalg.det(a)) > 1e-6 * np.abs(a).max(axis=(1, 2)) ** 4
-    out = np.full((CYLINDER_HYPOTHESES, 4, 2), np.nan)
-    if good.any():
-        out[good] = np.linalg.solve(a[good], b[good])
-    return out
-
-
-def _fit_cylinder(
-    train: _Keys, query: _Keys, outline: NDArray[np.float32], o: LabelOptions
-) -> _Fit | None:
-    """RANSAC fit of an upright cylinder seen by an affine camera, for labels wrapped round
-    a can, a cup or a jar (one homography fits only a strip of them).
-
-    The training silhouette (``outline``) gives the axis column ``c`` and the radius ``R``;
-    a training pixel ``(x, y)`` is lifted to the surface point ``(R sin φ, y, R cos φ)``,
-    ``sin φ = (x - c) / R``, and the scene pixel is an affine camera's image of it:
-    ``[x', y'] = [1, X, Z, Y] @ P`` with ``P`` 4 × 2 — weak perspective (Hartley & Zisserman
-    2004, sec. 6.3.4, the affine camera) of the object turned and moved freely. 4 matches
-    fix ``P``; inliers must agree in position, scale and orientation as for a homography.
-    The :class:`Detection`'s ``homography`` is then the least-squares homography of the
-    inliers (to carry the outline); ``model`` is ``"cylinder"``.
-    """
-    frame = _cylinder_frame(outline)
-    n = len(train.xy)
-    if frame is None or n < max(o.min_inliers, o.homography_min):
-        return None
-    design = _lift(train.xy, frame)
-    rng = np.random.default_rng(n)
-    hyp = _cylinder_hypotheses(design, query.xy, rng)
-    with np.errstate(invalid="ignore"):
-        err = np.linalg.norm(np.einsum("nj,kjd->knd", design, hyp) - query.xy[None], axis=2)
-        votes = (err <= o.ransac_threshold).sum(axis=1)
-    if not votes.any():
-        return None
-    params = hyp[int(np.argmax(votes))]
-    inl = _cylinder_consistent(params, frame, train, query, o)
-    for _ in range(2):  # refit on the consistent inliers
-        if inl.sum() < 5:
-            return None
-        refit, *_ = np.linalg.lstsq(design[inl], query.xy[inl], rcond=None)
-        inl2 = _cylinder_consistent(refit, frame, train, query, o)
-        if inl2.sum() < inl.sum():
-            break
-        params, inl = refit, inl2
-    h, _ = cv2.findHomography(train.xy[inl].astype(np.float32), query.xy[inl].astype(np.float32), 0)
-    if h is None or not _plausible(np.asarray(h, np.float64), outline, train.xy[inl]):
-        return None
-    # the silhouette carried by the cylinder model is truer than by the homography
-    return _Fit(np.asarray(h, np.float64) / h[2, 2], inl, "cylinder")
-
-
 def _fit_view(
     train: _Keys, query: _Keys, outline: NDArray[np.float32], o: LabelOptions
 ) -> _Fit | None:
@@ -352,11 +216,4 @@ def _fit_view(
             best is None or sim.inliers.sum() > SIMILARITY_MARGIN * best.inliers.sum()
         ):
             best = sim
-    # A label round a cylinder: only where the plane models explain few matches.
-    if n >= o.min_inliers and (best is None or n > CYLINDER_MARGIN * best.inliers.sum()):
-        cyl = _fit_cylinder(train, query, outline, o)
-        if cyl is not None and (
-            best is None or cyl.inliers.sum() > CYLINDER_MARGIN * best.inliers.sum()
-        ):
-            best = cyl
     return best
