@@ -167,7 +167,8 @@ def test_persistence_across_open(tmp_path: Path, scene: Scene) -> None:
     assert meta["application"] == APPLICATION
     assert meta["schema_version"] == str(SCHEMA_VERSION)
     stored = np.frombuffer(blob, np.uint8).reshape(-1, 128)
-    np.testing.assert_array_equal(stored, detect(cat).descriptors)
+    # add_object detects with its own default contrast threshold (0.02)
+    np.testing.assert_array_equal(stored, detect(cat, contrast_threshold=0.02).descriptors)
 
 
 def test_create_refuses_existing_file(db_copy: Path) -> None:
@@ -216,7 +217,9 @@ def test_interrupt_while_storing_rolls_back(db_copy: Path, scene: Scene) -> None
         with pytest.raises(KeyboardInterrupt):
             db.add_object("cat", imgs, replace=True, progress=ctrl_c_on_second_view)
         # The connection is still usable and shows the old state.
-        assert db.views("cat")[0].keypoints == len(detect(scene.objects["cat"]))
+        assert db.views("cat")[0].keypoints == len(
+            detect(scene.objects["cat"], contrast_threshold=0.02)
+        )
     assert stages[:3] == [("extract", 1, 3), ("extract", 2, 3), ("extract", 3, 3)]
     assert stages[-1] == ("store", 2, 3)
     assert _sha(db_copy) == sha

@@ -351,7 +351,8 @@ def test_label_skips_views_with_the_same_result(
     with ObjectDatabase.open(many_views, readonly=True, index=kind) as db:  # type: ignore[arg-type]
         for feats in _scenes():
             for max_views, min_inliers in ((3, 8), (5, 30)):
-                o = LabelOptions(max_views=max_views, min_inliers=min_inliers)
+                # one instance per label, as the every-view reference looks for
+                o = LabelOptions(max_views=max_views, min_inliers=min_inliers, max_instances=1)
                 fits.clear()
                 want = _every_view(db, feats, o)
                 every += len(fits)
