@@ -268,7 +268,7 @@ def _sparse_histograms(rng: np.random.Generator, rows: int, nbins: int) -> np.nd
 
 
 @settings(max_examples=40, deadline=None)
-@given(seeds, st.sampled_from([8, 12, 36, 180, 256, 360]))
+@given(seeds, st.sampled_from([8, 12, 36, 180, 256, 360, 512, 520]))
 def test_four_direction_degrees_match_four_degrees(seed: int, nbins: int) -> None:
     rng = np.random.default_rng(seed)
     h = _sparse_histograms(rng, int(rng.integers(1, 40)), nbins)

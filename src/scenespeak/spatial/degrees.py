@@ -277,7 +277,7 @@ def many_degrees(
     ----------
     h : ndarray, shape (R, N)
         Non-negative force histograms, one per row; ``N`` divisible by 4 (rows of more than
-        256 bins are passed to :func:`direction_degree` one by one).
+        512 bins are passed to :func:`direction_degree` one by one).
     index : ndarray of int, shape (R,)
         The direction (bin) of each row.
 
@@ -297,7 +297,7 @@ def many_degrees(
     h = np.asarray(h, dtype=np.float64)
     rows, nbins = h.shape
     index = np.asarray(index, dtype=np.intp)
-    if 2 * (nbins // 4) - 1 > 128:  # longer runs are summed in another order: row by row
+    if nbins // 4 > 128:  # longer prefix sums are added in another order: row by row
         found = [direction_degree(h[r], int(index[r])) for r in range(rows)]
         d, t, e, q = (
             np.array([getattr(x, f) for x in found], dtype=np.float64)
@@ -344,7 +344,7 @@ def four_direction_degrees(
     h = np.asarray(h, dtype=np.float64)
     rows, nbins = h.shape
     n = nbins // 4
-    if 2 * n - 1 > 128:
+    if n > 128:  # longer prefix sums are added in another order (_prefix_sums)
         index = np.tile(np.arange(4) * n, rows)
         d, t, _, _ = many_degrees(np.repeat(h, 4, axis=0), index)
         return d.reshape(rows, 4), t.reshape(rows, 4)
@@ -413,7 +413,7 @@ def _cancelled(
 
 def _turned_degrees(g: NDArray[np.float64]) -> NDArray[np.float64]:
     """``(4, R)``: degree, deviation, effective and contrary of bin 0's direction of each row
-    of ``g`` (``2 * N/4 - 1 <= 128``), the operations of :func:`direction_degree`."""
+    of ``g`` (``N/4 <= 128``), the operations of :func:`direction_degree`."""
     return _block_degrees(g, np.arange(len(g)), 0)
 
 
@@ -421,7 +421,7 @@ def _block_degrees(
     h: NDArray[np.float64], at: NDArray[np.intp], shift: int, contrary_forces: bool = True
 ) -> NDArray[np.float64]:
     """``(4, len(at))``: degree, deviation, effective and contrary of the direction of bin
-    ``shift`` of the rows ``at`` of ``h`` (``2 * N/4 - 1 <= 128``): the operations of
+    ``shift`` of the rows ``at`` of ``h`` (``N/4 <= 128``): the operations of
     :func:`direction_degree`, on all rows at once. ``contrary_forces=False`` says that these
     rows have no force outside the favourable bins: their contrary mass is then 0.0 and
     nothing is cancelled (what :func:`direction_degree` finds), without gathering them."""
