@@ -28,8 +28,9 @@ Layout
 ------
 ``regions`` (validation, :func:`prepare`), ``masks`` + ``_trace`` (tracing: marching squares),
 ``contact`` (overlap, via :mod:`scenespeak.geometry.polygons`), ``reference`` (the NumPy sweep:
-the specification), ``_sweep`` + ``kernel`` (the compiled sweep, Numba; the reference without
-it or for small work, see ``_jit``), ``_shapes`` (compiled helpers of ``prepare``), ``api``.
+the specification), ``_sweep`` + ``_table`` + ``kernel`` (the compiled sweep, Numba; the
+reference without it or for small work, see ``_jit``), ``_shapes`` (compiled helpers of
+``prepare``), ``api``.
 
 Examples
 --------

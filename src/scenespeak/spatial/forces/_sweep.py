@@ -11,7 +11,7 @@ differs is the order of work, chosen for the hardware:
 * one direction at a time, all regions and all pairs: each region's edges are projected once
   per direction (not once per pair) into a small table sorted by the lower end of the edge's
   range of lines, kept sorted from one direction to the next by insertion sort (the order
-  changes little between neighbouring directions);
+  changes little between neighbouring directions; :mod:`~scenespeak.spatial.forces._table`);
 * a pair is skipped before any per-edge work when the two regions' ranges of lines are apart
   in that direction (no line meets both);
 * the overlapping edge pairs come from a two-pointer walk over the two sorted tables (each pair
@@ -31,14 +31,13 @@ from typing import TypeVar
 import numpy as np
 
 from scenespeak.spatial.forces._jit import jit
+from scenespeak.spatial.forces._table import _tables
 
 F = TypeVar("F", bound=Callable[..., object])
 
 # Below this |h| / |m| the divided difference of Ψ is replaced by its Taylor series (the
 # reference's _TAYLOR_RATIO).
 TAYLOR_RATIO = 1e-3
-# Regions with more edges than this are bucket-sorted before the insertion sort (_order).
-BUCKET_SORT_FROM = 96
 
 
 @jit
@@ -111,140 +110,8 @@ def _mean_phi(code: int, r: float, y0: float, a0: float, a1: float) -> float:
 
 
 @jit
-def _project(
-    c: float, s: float, pts: np.ndarray, nxt: np.ndarray, lo_g: int, hi_g: int, tab: np.ndarray
-) -> tuple[float, float]:
-    """Rows ``lo_g:hi_g`` of the edge table for direction (c, s); returns the ``v`` range.
-
-    ``tab[e]`` is ``[v_lo, v_hi, s(v_lo), ds/dv, sign(dv)]`` of edge ``e`` in its region's
-    frame (``pts`` are relative to the region's origin).
-    """
-    vmin = math.inf
-    vmax = -math.inf
-    for e in range(lo_g, hi_g):
-        f = nxt[e]
-        s0 = pts[e, 0] * c + pts[e, 1] * s
-        v0 = pts[e, 1] * c - pts[e, 0] * s
-        s1 = pts[f, 0] * c + pts[f, 1] * s
-        v1 = pts[f, 1] * c - pts[f, 0] * s
-        dv = v1 - v0
-        if dv < 0.0:
-            tab[e, 0] = v1
-            tab[e, 1] = v0
-            tab[e, 2] = s1
-            tab[e, 4] = -1.0
-        else:
-            tab[e, 0] = v0
-            tab[e, 1] = v1
-            tab[e, 2] = s0
-            tab[e, 4] = 1.0 if dv > 0.0 else 0.0
-        tab[e, 3] = (s1 - s0) / dv if dv != 0.0 else 0.0
-        vmin = min(vmin, v0)
-        vmax = max(vmax, v0)
-    return vmin, vmax
-
-
-@jit
-def _bucket(tab: np.ndarray, perm: np.ndarray, keys: np.ndarray, lo_g: int, hi_g: int) -> None:
-    """Stable counting sort of ``perm[lo_g:hi_g]`` into ``n`` equal-width buckets of ``v_lo``."""
-    n = hi_g - lo_g
-    vmin = math.inf
-    vmax = -math.inf
-    for j in range(lo_g, hi_g):
-        v = tab[perm[j], 0]
-        keys[j] = v
-        vmin = min(vmin, v)
-        vmax = max(vmax, v)
-    if not vmax > vmin:
-        return
-    scale = (n - 1) / (vmax - vmin)
-    counts = np.zeros(n + 1, dtype=np.int64)
-    slot = np.empty(n, dtype=np.int64)
-    for j in range(n):
-        k = int((keys[lo_g + j] - vmin) * scale)
-        k = min(max(k, 0), n - 1)
-        slot[j] = k
-        counts[k + 1] += 1
-    for k in range(n):
-        counts[k + 1] += counts[k]
-    moved = np.empty(n, dtype=np.int64)
-    for j in range(n):
-        k = slot[j]
-        moved[counts[k]] = perm[lo_g + j]
-        counts[k] += 1
-    for j in range(n):
-        perm[lo_g + j] = moved[j]
-
-
-@jit
-def _order(
-    tab: np.ndarray, perm: np.ndarray, keys: np.ndarray, lo_g: int, hi_g: int, first: bool
-) -> None:
-    """Keep ``perm[lo_g:hi_g]`` sorted by ``v_lo``: a full sort the first time, then insertion
-    sort from the previous direction's order (few inversions between neighbours), on the
-    keys copied contiguous so that the shifts read and write neighbouring memory.
-
-    Over half a turn every pair of vertices swaps once, so insertion sort alone costs
-    ``n² / 2`` moves per region; above :data:`BUCKET_SORT_FROM` edges the previous order is
-    first distributed into ``n`` buckets of equal ``v`` width (:func:`_bucket`), which leaves
-    only the few inversions inside each bucket: linear time per direction for outlines of
-    thousands of vertices (traced masks).
-    """
-    if first:
-        order = np.argsort(tab[lo_g:hi_g, 0])
-        for j in range(hi_g - lo_g):
-            perm[lo_g + j] = lo_g + order[j]
-        return
-    if hi_g - lo_g > BUCKET_SORT_FROM:
-        _bucket(tab, perm, keys, lo_g, hi_g)
-    for j in range(lo_g, hi_g):
-        keys[j] = tab[perm[j], 0]
-    for j in range(lo_g + 1, hi_g):
-        kv = keys[j]
-        if keys[j - 1] <= kv:
-            continue
-        key = perm[j]
-        i = j - 1
-        while i >= lo_g and keys[i] > kv:
-            perm[i + 1] = perm[i]
-            keys[i + 1] = keys[i]
-            i -= 1
-        perm[i + 1] = key
-        keys[i + 1] = kv
-
-
-@jit
-def _tables(
-    c: float,
-    s: float,
-    pts: np.ndarray,
-    nxt: np.ndarray,
-    region_start: np.ndarray,
-    first: bool,
-    scratch: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray],
-) -> None:
-    """Every region's edge table for direction (c, s), each sorted by the edge's ``v_lo``.
-
-    ``scratch`` is ``(tab, perm, extent, srt, keys)``: ``tab`` the rows of :func:`_project`,
-    ``perm`` each region's edges by ``v_lo``, ``extent[g]`` region g's range of ``v``,
-    ``srt[j] = tab[perm[j]]`` (the rows in sorted order, contiguous), ``keys`` scratch.
-    """
-    tab, perm, extent, srt, keys = scratch
-    for g in range(region_start.size - 1):
-        lo_g = region_start[g]
-        hi_g = region_start[g + 1]
-        extent[g, 0], extent[g, 1] = _project(c, s, pts, nxt, lo_g, hi_g, tab)
-        _order(tab, perm, keys, lo_g, hi_g, first)
-        for j in range(lo_g, hi_g):
-            e = perm[j]
-            for q in range(5):
-                srt[j, q] = tab[e, q]
-
-
-@jit
 def _collect(
-    tab: np.ndarray,
-    perm: np.ndarray,
+    srt: np.ndarray,
     a0: int,
     a1: int,
     b0: int,
@@ -252,7 +119,8 @@ def _collect(
     dvb: float,
     buf: np.ndarray,
 ) -> int:
-    """The overlapping edge pairs of two regions in one direction, into ``buf`` (two pointers).
+    """The overlapping edge pairs of two regions in one direction, into ``buf`` (two pointers
+    over the sorted rows ``srt``; the pairs as row indices).
 
     Case 1: for each A-edge, the B-edges with ``lo_a <= lo_b < hi_a``; case 2: for each B-edge,
     the A-edges with ``lo_b < lo_a < hi_b``. Every pair whose ranges overlap on a positive
@@ -263,30 +131,28 @@ def _collect(
     count = 0
     j = b0
     for i in range(a0, a1):
-        ea = perm[i]
-        lo_a = tab[ea, 0]
-        hi_a = tab[ea, 1]
-        while j < b1 and tab[perm[j], 0] + dvb < lo_a:
+        lo_a = srt[i, 0]
+        hi_a = srt[i, 1]
+        while j < b1 and srt[j, 0] + dvb < lo_a:
             j += 1
         jj = j
-        while jj < b1 and tab[perm[jj], 0] + dvb < hi_a:
+        while jj < b1 and srt[jj, 0] + dvb < hi_a:
             if count < size:
-                buf[count, 0] = ea
-                buf[count, 1] = perm[jj]
+                buf[count, 0] = i
+                buf[count, 1] = jj
             count += 1
             jj += 1
     i = a0
     for j in range(b0, b1):
-        eb = perm[j]
-        lo_b = tab[eb, 0] + dvb
-        hi_b = tab[eb, 1] + dvb
-        while i < a1 and tab[perm[i], 0] <= lo_b:
+        lo_b = srt[j, 0] + dvb
+        hi_b = srt[j, 1] + dvb
+        while i < a1 and srt[i, 0] <= lo_b:
             i += 1
         ii = i
-        while ii < a1 and tab[perm[ii], 0] < hi_b:
+        while ii < a1 and srt[ii, 0] < hi_b:
             if count < size:
-                buf[count, 0] = perm[ii]
-                buf[count, 1] = eb
+                buf[count, 0] = ii
+                buf[count, 1] = j
             count += 1
             ii += 1
     return count if count <= size else -count
@@ -294,7 +160,7 @@ def _collect(
 
 @jit
 def _integrate(
-    tab: np.ndarray,
+    srt: np.ndarray,
     buf: np.ndarray,
     count: int,
     shift: tuple[float, float],
@@ -316,21 +182,21 @@ def _integrate(
     for q in range(count):
         e = buf[q, 0]
         f = buf[q, 1]
-        lo_a = tab[e, 0]
-        lo_b = tab[f, 0] + dvb
-        hi_a = tab[e, 1]
-        hi_b = tab[f, 1] + dvb
+        lo_a = srt[e, 0]
+        lo_b = srt[f, 0] + dvb
+        hi_a = srt[e, 1]
+        hi_b = srt[f, 1] + dvb
         lo = lo_a if lo_a > lo_b else lo_b
         hi = hi_a if hi_a < hi_b else hi_b
         if not hi > lo:
             continue
-        s_a = tab[e, 2]
-        k_a = tab[e, 3]
-        s_b = tab[f, 2] + dsb
-        k_b = tab[f, 3]
+        s_a = srt[e, 2]
+        k_a = srt[e, 3]
+        s_b = srt[f, 2] + dsb
+        k_b = srt[f, 3]
         d0 = (s_a + k_a * (lo - lo_a)) - (s_b + k_b * (lo - lo_b))
         d1 = (s_a + k_a * (hi - lo_a)) - (s_b + k_b * (hi - lo_b))
-        weight = (tab[e, 4] * tab[f, 4]) * (lo - hi)
+        weight = (srt[e, 4] * srt[f, 4]) * (lo - hi)
         if d0 * d1 < 0.0:
             top = d0 if d0 > d1 else d1
             bottom = d1 if d0 > d1 else d0
@@ -501,7 +367,7 @@ def sweep(
     half = directions // 2 if both else directions
     out = np.zeros((n_pairs, n_k, directions))
     tab = np.empty((pts.shape[0], 5))
-    perm = np.empty(pts.shape[0], dtype=np.int64)
+    perm = np.arange(pts.shape[0])  # the small regions' first order (see _tables)
     extent = np.empty((region_start.size - 1, 2))
     srt = np.empty((pts.shape[0], 5))
     keys = np.empty(pts.shape[0])
@@ -532,12 +398,12 @@ def sweep(
                     out[p, 0, d + half] += q0
                     out[p, 1, d + half] += q2
                 continue
-            count = _collect(tab, perm, a0, a1, b0, b1, dvb, buf)
+            count = _collect(srt, a0, a1, b0, b1, dvb, buf)
             if count < 0:
                 buf = np.empty((2 * -count, 2), dtype=np.int64)
-                count = _collect(tab, perm, a0, a1, b0, b1, dvb, buf)
+                count = _collect(srt, a0, a1, b0, b1, dvb, buf)
             acc[:] = 0.0
-            _integrate(tab, buf, count, (dvb, ox * c + oy * s), codes, rs, y0[p], acc)
+            _integrate(srt, buf, count, (dvb, ox * c + oy * s), codes, rs, y0[p], acc)
             for k in range(n_k):
                 out[p, k, d] += acc[0, k]
                 if both:
