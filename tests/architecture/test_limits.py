@@ -68,7 +68,6 @@ KNOWN: dict[tuple[str, str, str], int] = {
     ("parameters", "perception/rgbd.py", "measure_object"): 11,
     ("parameters", "pipeline_rgbd.py", "describe_rgbd"): 12,
     ("parameters", "pipeline_rgbd.py", "describe_stereo_masks"): 10,
-    ("parameters", "tools/annotate.py", "annotate"): 9,
     ("parameters", "tools/fuzz/runner.py", "_outcome"): 9,
 }
 

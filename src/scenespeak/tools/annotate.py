@@ -23,8 +23,8 @@ import json
 import math
 import tempfile
 import time
-from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass, fields, replace
 from os import PathLike
 from pathlib import Path
 from typing import Any
@@ -35,6 +35,7 @@ from scenespeak.tools.output import ResumableJsonl, SceneRecord, log_path, write
 
 __all__ = [
     "AMBIGUOUS_DIAGONAL_DEG",
+    "AnnotateOptions",
     "AnnotateSummary",
     "annotate",
     "annotate_batch",
@@ -149,6 +150,36 @@ def annotate_batch(folders: Sequence[str], database: DatabaseHandle) -> list[Sce
 
 
 @dataclass(frozen=True)
+class AnnotateOptions:
+    """How :func:`annotate` treats an earlier run and what else it writes.
+
+    Attributes
+    ----------
+    resume : bool
+        Continue a previous run into the same ``out``: finished scenes are skipped.
+    retry_failed : bool
+        With ``resume``, run the scenes that failed before again.
+    parquet : path, optional
+        Also write the pairs (all of ``out``) as Parquet, same columns, at the end.
+    """
+
+    resume: bool = False
+    retry_failed: bool = False
+    parquet: str | PathLike[str] | None = None
+
+    @classmethod
+    def with_overrides(
+        cls, options: AnnotateOptions | None, overrides: Mapping[str, object]
+    ) -> AnnotateOptions:
+        """``options`` (or the defaults) with single fields replaced (unknown names refused)."""
+        base = options if options is not None else cls()
+        unknown = sorted(set(overrides) - {f.name for f in fields(cls)})
+        if unknown:
+            raise TypeError(f"annotate() got unexpected keyword argument(s) {unknown}")
+        return replace(base, **overrides) if overrides else base  # type: ignore[arg-type]
+
+
+@dataclass(frozen=True)
 class AnnotateSummary:
     """What a run did.
 
@@ -222,11 +253,10 @@ def annotate(
     *,
     db: str | PathLike[str] | None = None,
     engine: EngineOptions | None = None,
-    resume: bool = False,
-    retry_failed: bool = False,
-    parquet: str | PathLike[str] | None = None,
+    options: AnnotateOptions | None = None,
     progress: Callable[[int, int], Any] | None = None,
     task: Callable[[Sequence[str], DatabaseHandle], list[SceneRecord]] = annotate_batch,
+    **overrides: object,
 ) -> AnnotateSummary:
     """Label every ordered pair of every scene of ``dataset`` into ``out`` (JSON Lines).
 
@@ -243,12 +273,9 @@ def annotate(
         one of the two.
     engine : EngineOptions, optional
         Local cluster size or scheduler address, batch size (default: 2 local workers).
-    resume : bool
-        Continue a previous run into the same ``out``: finished scenes are skipped.
-    retry_failed : bool
-        With ``resume``, run the scenes that failed before again.
-    parquet : path, optional
-        Also write the pairs (all of ``out``) as Parquet, same columns, at the end.
+    options : AnnotateOptions, optional
+        ``resume``, ``retry_failed``, ``parquet`` (also accepted as single keywords,
+        ``resume=True``, ...).
     progress : callable, optional
         ``progress(done, total)`` after each batch, counting scenes of this run.
     task : callable
@@ -268,6 +295,8 @@ def annotate(
     from scenespeak.safetext import check_output
     from scenespeak.scene_folder import check_supported, find_scene_folders, scene_layout
 
+    run = AnnotateOptions.with_overrides(options, overrides)
+    resume, retry_failed, parquet = run.resume, run.retry_failed, run.parquet
     root = Path(dataset)
     scenes = find_scene_folders(root)
     if not scenes:
@@ -280,7 +309,7 @@ def annotate(
     check_supported(scenes)
     if not resume:
         ResumableJsonl.refuse_existing(out)
-    options = engine or EngineOptions()
+    engine_options = engine or EngineOptions()
     start = time.perf_counter()
     with tempfile.TemporaryDirectory(prefix="scenespeak-annotate-") as tmp:
         db_file = _database_file(root, db, tmp)
@@ -307,7 +336,7 @@ def annotate(
                 progress(0, len(todo))
             if todo:  # nothing left (a finished run resumed): no cluster to start
                 run_batches(
-                    task, todo, options, on_results=take, on_failure=failed, database=db_file
+                    task, todo, engine_options, on_results=take, on_failure=failed, database=db_file
                 )
             pairs = sink.pairs
     parquet_path = None
