@@ -265,12 +265,10 @@ class RGBDStream:
             found = describe_rgbd(color, d, self.cam, db=self.db, options=o, summary=False)
             return list(found.objects), found.up_source, {"objects": time.perf_counter() - t0}
         m = _checked_masks(masks, d)
-        counts = np.bincount(m.ravel().astype(np.intp, copy=False))
-        present = set(np.flatnonzero(counts).tolist()) - {0}
         exclude = None if self.cam.up is not None else m > 0  # the plane is sought off the objects
         vec, up_source, _ = resolve_up(d, self.cam, exclude, o)
         t1 = time.perf_counter()
-        if not present:
+        if not m.any():  # nothing segmented in this frame: no object seen
             return [], up_source, {"up": t1 - t0, "objects": 0.0}
         inst = instances_from_array(m, labels, size=size, source="masks")
         out = [x for x in measure_masks(d, self.cam, inst, vec, o) if isinstance(x, MeasuredObject)]
