@@ -64,8 +64,11 @@ def merge_boxes(boxes: NDArray[np.float64]) -> NDArray[np.float64]:
 def _boxes(
     features: Features, labelling: Labelling, shape: tuple[int, int], o: LabelOptions
 ) -> NDArray[np.float64]:
-    """Boxes round the keypoints that passed the ratio test but explain no detection."""
+    """Boxes round the keypoints that passed the ratio test but explain no detection and lie
+    outside every detection's outline (there they are the rest of an object found)."""
     lone = (labelling.matched >= 0) & (labelling.labels < 0)
+    for det in labelling.detections:
+        lone &= ~inside_polygon(features.xy, det.outline_in_scene)
     if not lone.any():
         return np.zeros((0, 4))
     xy = features.xy[lone]
@@ -80,7 +83,10 @@ def _boxes(
     # the boxes with most unexplained matches first, at most finer_max_boxes of them
     counts = np.array([np.sum(inside_box(xy, bb)) for bb in b[keep]], dtype=np.int64).reshape(-1)
     order = np.argsort(-counts, kind="stable")[: o.finer_max_boxes]
-    return b[keep][order]
+    chosen = b[keep][order]
+    # within the budget of enlarged pixels (a share of the scene's), most matches first
+    spent = np.cumsum((chosen[:, 2] - chosen[:, 0]) * (chosen[:, 3] - chosen[:, 1]))
+    return chosen[spent <= o.finer_budget * h * w]
 
 
 def inside_box(xy: NDArray[np.float64], box: NDArray[np.float64]) -> NDArray[np.bool_]:

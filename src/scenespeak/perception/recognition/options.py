@@ -70,6 +70,8 @@ class LabelOptions:
         40,000 px², 6 — larger boxes are skipped, and at most this many are searched (those
         with most unexplained matches first): the finer look stays a small share of the
         scene's SIFT time.
+    finer_budget : float
+        0.15 — the boxes searched cover at most this share of the scene (before enlarging).
     """
 
     ratio: float = 0.8
@@ -91,6 +93,7 @@ class LabelOptions:
     finer_pad: float = 24.0
     finer_max_area: float = 40000.0
     finer_max_boxes: int = 6
+    finer_budget: float = 0.15
 
     @classmethod
     def with_overrides(
