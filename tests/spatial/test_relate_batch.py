@@ -17,6 +17,7 @@ import dataclasses
 import gc
 import importlib
 import pickle
+from collections.abc import Iterator
 
 import numpy as np
 import pytest
@@ -37,6 +38,17 @@ from scenespeak.spatial.layouts import LAYOUTS, disc, rect
 
 relate_module = importlib.import_module("scenespeak.spatial.language.relate")
 seeds = st.integers(min_value=0, max_value=2**32 - 1)
+
+
+@pytest.fixture(autouse=True, scope="module")
+def _one_force_kernel() -> Iterator[None]:
+    """Both paths on the same force kernel. By default (``SCENESPEAK_NUMBA=auto``) a process
+    switches from the NumPy reference to the compiled sweep once its work pays for loading
+    Numba, which could happen between the two paths of a comparison (the kernels agree to
+    1e-9, not bit for bit). The policy is read at every sweep."""
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv("SCENESPEAK_NUMBA", "never")
+        yield
 
 
 # -- scenes --------------------------------------------------------------------------------

@@ -8,6 +8,9 @@ Every helper is compared here with the path it replaces, bit for bit, on random 
 
 from __future__ import annotations
 
+import contextlib
+from collections.abc import Iterator
+
 import numpy as np
 import pytest
 from hypothesis import given, settings
@@ -32,6 +35,17 @@ from scenespeak.spatial.degrees import (
 from scenespeak.spatial.language import rules
 
 seeds = st.integers(min_value=0, max_value=2**32 - 1)
+
+
+@contextlib.contextmanager
+def _one_force_kernel() -> Iterator[None]:
+    """Both paths of a comparison on the same force kernel: by default
+    (``SCENESPEAK_NUMBA=auto``) a process switches from the NumPy reference to the compiled
+    sweep once its work pays for loading Numba, which could happen between the two paths (the
+    kernels agree to 1e-9, not bit for bit). The policy is read at every sweep."""
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv("SCENESPEAK_NUMBA", "never")
+        yield
 
 
 def _convex(rng: np.random.Generator, spread: float = 2.0) -> np.ndarray:
@@ -82,54 +96,56 @@ def _assert_same_relation(a: language.Relation, b: language.Relation) -> None:
 @settings(max_examples=40)
 @given(seeds)
 def test_relate_objects_matches_the_per_pair_functions(seed: int) -> None:
-    rng = np.random.default_rng(seed)
-    hulls = _scene(rng)
-    names = [f"obj{k}" for k in range(len(hulls))]
-    heights = [rng.uniform(0.0, 0.3, rng.integers(3, 20)) for _ in hulls]
-    if rng.random() < 0.3:
-        heights[0] = heights[0] + 0.4  # something above
-    got = language.relate_objects(hulls, names=names, heights=heights)
-    expected: dict[tuple[int, int], tuple[language.Relation, language.PairHistograms]] = {}
-    for i in range(len(hulls)):
-        for j in range(i + 1, len(hulls)):
-            pair = language.pair_histograms(hulls[i], hulls[j], directions=180)
-            ab, ba = language.relations_of_pair(
-                pair,
-                argument=names[i],
-                referent=names[j],
-                a_heights=heights[i],
-                b_heights=heights[j],
-            )
-            expected[i, j] = (ab, pair)
-            expected[j, i] = (ba, pair.reversed())
-    order = [(i, j) for i in range(len(hulls)) for j in range(len(hulls)) if i != j]
-    assert len(got) == len(order)
-    for (i, j), (rel, hist) in zip(order, got, strict=True):
-        ref_rel, ref_hist = expected[i, j]
-        _assert_same_relation(rel, ref_rel)
-        assert (rel.argument, rel.referent) == (names[i], names[j])
-        np.testing.assert_array_equal(hist.f0, ref_hist.f0)
-        np.testing.assert_array_equal(hist.f2, ref_hist.f2)
-        assert hist.hybrid == ref_hist.hybrid
-        assert hist.intersection == ref_hist.intersection
-        assert (hist.area_a, hist.area_b) == (ref_hist.area_a, ref_hist.area_b)
+    with _one_force_kernel():
+        rng = np.random.default_rng(seed)
+        hulls = _scene(rng)
+        names = [f"obj{k}" for k in range(len(hulls))]
+        heights = [rng.uniform(0.0, 0.3, rng.integers(3, 20)) for _ in hulls]
+        if rng.random() < 0.3:
+            heights[0] = heights[0] + 0.4  # something above
+        got = language.relate_objects(hulls, names=names, heights=heights)
+        expected: dict[tuple[int, int], tuple[language.Relation, language.PairHistograms]] = {}
+        for i in range(len(hulls)):
+            for j in range(i + 1, len(hulls)):
+                pair = language.pair_histograms(hulls[i], hulls[j], directions=180)
+                ab, ba = language.relations_of_pair(
+                    pair,
+                    argument=names[i],
+                    referent=names[j],
+                    a_heights=heights[i],
+                    b_heights=heights[j],
+                )
+                expected[i, j] = (ab, pair)
+                expected[j, i] = (ba, pair.reversed())
+        order = [(i, j) for i in range(len(hulls)) for j in range(len(hulls)) if i != j]
+        assert len(got) == len(order)
+        for (i, j), (rel, hist) in zip(order, got, strict=True):
+            ref_rel, ref_hist = expected[i, j]
+            _assert_same_relation(rel, ref_rel)
+            assert (rel.argument, rel.referent) == (names[i], names[j])
+            np.testing.assert_array_equal(hist.f0, ref_hist.f0)
+            np.testing.assert_array_equal(hist.f2, ref_hist.f2)
+            assert hist.hybrid == ref_hist.hybrid
+            assert hist.intersection == ref_hist.intersection
+            assert (hist.area_a, hist.area_b) == (ref_hist.area_a, ref_hist.area_b)
 
 
 def test_relate_objects_without_heights_and_on_other_directions() -> None:
-    rng = np.random.default_rng(7)
-    hulls = [_convex(rng) for _ in range(4)]
-    names = ["a", "b", "c", "d"]
-    for directions in (8, 36, 360):
-        got = language.relate_objects(hulls, names=names, directions=directions)
-        order = [(i, j) for i in range(4) for j in range(4) if i != j]
-        pair = language.pair_histograms(hulls[1], hulls[2], directions=directions)
-        rel, hist = got[order.index((1, 2))]
-        _assert_same_relation(rel, language.relation_of_pair(pair, argument="b", referent="c"))
-        np.testing.assert_array_equal(hist.f2, pair.f2)
-        rel, hist = got[order.index((2, 1))]  # the same sweep, turned by 180°
-        back = pair.reversed()
-        _assert_same_relation(rel, language.relation_of_pair(back, argument="c", referent="b"))
-        np.testing.assert_array_equal(hist.f0, back.f0)
+    with _one_force_kernel():
+        rng = np.random.default_rng(7)
+        hulls = [_convex(rng) for _ in range(4)]
+        names = ["a", "b", "c", "d"]
+        for directions in (8, 36, 360):
+            got = language.relate_objects(hulls, names=names, directions=directions)
+            order = [(i, j) for i in range(4) for j in range(4) if i != j]
+            pair = language.pair_histograms(hulls[1], hulls[2], directions=directions)
+            rel, hist = got[order.index((1, 2))]
+            _assert_same_relation(rel, language.relation_of_pair(pair, argument="b", referent="c"))
+            np.testing.assert_array_equal(hist.f2, pair.f2)
+            rel, hist = got[order.index((2, 1))]  # the same sweep, turned by 180°
+            back = pair.reversed()
+            _assert_same_relation(rel, language.relation_of_pair(back, argument="c", referent="b"))
+            np.testing.assert_array_equal(hist.f0, back.f0)
 
 
 def test_relate_objects_refuses_bad_input() -> None:
