@@ -40,8 +40,6 @@ KNOWN: dict[tuple[str, str, str], int] = {
     ("parameters", "perception/stereo.py", "_global_block"): 9,
     ("parameters", "perception/stereo.py", "_select"): 9,
     ("parameters", "perception/recognition/ivf.py", "_build"): 10,
-    ("parameters", "tools/figures/plots.py", "plot_matches"): 10,
-    ("parameters", "tools/figures/plots.py", "plot_points_3d"): 9,
     # landed by other issues during this session (after the limits test): to split
     ("complexity", "cli/watch.py", "_source"): 16,
     ("complexity", "inputs.py", "SceneInputs.check"): 19,

@@ -30,7 +30,7 @@ Like the seed paper's figures:
 2
 """
 
-from scenespeak.tools.figures._style import UNLABELLED_COLOR, label_colors
+from scenespeak.tools.figures._style import UNLABELLED_COLOR, FigureStyle, label_colors
 from scenespeak.tools.figures.plots import (
     plot_histograms,
     plot_hulls,
@@ -41,6 +41,7 @@ from scenespeak.tools.figures.report import plot_report, write_figures, write_re
 
 __all__ = [
     "UNLABELLED_COLOR",
+    "FigureStyle",
     "label_colors",
     "plot_histograms",
     "plot_hulls",

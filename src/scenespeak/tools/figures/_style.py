@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, fields, replace
 from typing import Any
 
 import numpy as np
@@ -123,3 +124,36 @@ def _legend_for(ax: Any, colors: Mapping[str, Color], used: Sequence[Any], **kw:
 
 
 # --------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class FigureStyle:
+    """Colours, title, size and resolution of one figure (``plot_matches``, ``plot_points_3d``).
+
+    Attributes
+    ----------
+    colors : mapping, optional
+        ``label -> colour``; by default :func:`label_colors` of the labels drawn.
+    title : str, optional
+        Figure title.
+    figsize : (width, height) inches, optional
+        None: the figure's own default size.
+    dpi : float
+        100 — resolution.
+    """
+
+    colors: Mapping[str, Color] | None = None
+    title: str | None = None
+    figsize: tuple[float, float] | None = None
+    dpi: float = 100.0
+
+    @classmethod
+    def with_overrides(
+        cls, style: FigureStyle | None, overrides: Mapping[str, object], what: str
+    ) -> FigureStyle:
+        """``style`` (or the defaults) with single fields replaced (unknown names refused)."""
+        base = style if style is not None else cls()
+        unknown = sorted(set(overrides) - {f.name for f in fields(cls)})
+        if unknown:
+            raise TypeError(f"{what}() got unexpected keyword argument(s) {unknown}")
+        return replace(base, **overrides) if overrides else base  # type: ignore[arg-type]

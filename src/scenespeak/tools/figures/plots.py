@@ -13,6 +13,7 @@ from numpy.typing import ArrayLike, NDArray
 from scenespeak.errors import InputError
 from scenespeak.tools.figures._style import (
     Color,
+    FigureStyle,
     _as_image,
     _as_labels,
     _as_points,
@@ -31,11 +32,9 @@ def plot_matches(
     right_xy: ArrayLike,
     labels: Sequence[str | None] | NDArray[Any] | None = None,
     *,
-    colors: Mapping[str, Color] | None = None,
     max_lines: int = 400,
-    title: str | None = None,
-    figsize: tuple[float, float] = (10.0, 4.0),
-    dpi: float = 100.0,
+    style: FigureStyle | None = None,
+    **overrides: object,
 ) -> Figure:
     """Draw the stereo matches: both images side by side, one line per match.
 
@@ -50,15 +49,12 @@ def plot_matches(
         Matched pixel positions (column, row) in each image.
     labels : sequence of str or None, optional
         One label per match (``None`` = no object).
-    colors : mapping, optional
-        ``label -> colour``; by default :func:`label_colors` of ``labels``.
     max_lines : int
         At most this many lines are drawn (spread evenly over the matches) so the picture stays
         readable; all points are still counted in the title.
-    title : str, optional
-        Figure title.
-    figsize, dpi
-        Size of the figure (inches) and resolution.
+    style : FigureStyle, optional
+        ``colors`` (by default :func:`label_colors` of ``labels``), ``title``, ``figsize``
+        (default 10 × 4 inches), ``dpi``; also accepted as single keywords (``colors=...``).
 
     Returns
     -------
@@ -79,7 +75,9 @@ def plot_matches(
     if len(lxy) != len(rxy):
         raise InputError("matches", f"{len(lxy)} left points but {len(rxy)} right points")
     labs = _as_labels(labels, len(lxy), "labels")
-    colors = label_colors(labs) if colors is None else colors
+    st = FigureStyle.with_overrides(style, overrides, "plot_matches")
+    colors = label_colors(labs) if st.colors is None else st.colors
+    title, figsize, dpi = st.title, st.figsize or (10.0, 4.0), st.dpi
 
     h = max(lim.shape[0], rim.shape[0])
     canvas = np.full((h, lim.shape[1] + rim.shape[1], 3), 255, np.uint8)
@@ -116,12 +114,10 @@ def plot_points_3d(
     labels: Sequence[str | None] | NDArray[Any] | None = None,
     *,
     up: ArrayLike = (0.0, -1.0, 0.0),
-    colors: Mapping[str, Color] | None = None,
-    title: str | None = None,
-    figsize: tuple[float, float] = (6.5, 5.5),
-    dpi: float = 100.0,
     elev: float = 22.0,
     azim: float = -60.0,
+    style: FigureStyle | None = None,
+    **overrides: object,
 ) -> Figure:
     """Draw the 3-D keypoints and their projections onto the horizontal and vertical planes.
 
@@ -138,12 +134,11 @@ def plot_points_3d(
         One label per point.
     up : 3-vector
         The world's up direction in the camera frame (default: level rig).
-    colors : mapping, optional
-        ``label -> colour``.
-    title : str, optional
-        Figure title.
-    figsize, dpi, elev, azim
-        Figure size, resolution and viewing angles.
+    elev, azim : float
+        Viewing angles (degrees).
+    style : FigureStyle, optional
+        ``colors``, ``title``, ``figsize`` (default 6.5 × 5.5 inches), ``dpi``; also accepted
+        as single keywords.
 
     Returns
     -------
@@ -151,7 +146,9 @@ def plot_points_3d(
     """
     pts = _as_points(xyz, 3, "xyz")
     labs = _as_labels(labels, len(pts), "labels")
-    colors = label_colors(labs) if colors is None else colors
+    st = FigureStyle.with_overrides(style, overrides, "plot_points_3d")
+    colors = label_colors(labs) if st.colors is None else st.colors
+    title, figsize, dpi = st.title, st.figsize or (6.5, 5.5), st.dpi
     from scenespeak.perception.objects import plane_basis
 
     world = pts @ plane_basis(up).T
