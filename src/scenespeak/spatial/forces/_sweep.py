@@ -217,7 +217,8 @@ def _f0_f2_terms(d0: float, d1: float, weight: float) -> tuple[float, float, flo
     """One edge pair's F0 and F2 terms at θ and at θ + π (``_integrate`` for codes 0 and 1).
 
     The same operations as :func:`_mean_phi` for those two kernels, inlined: the gap goes
-    linearly from ``d0`` to ``d1``; where it is negative the pair serves θ + π.
+    linearly from ``d0`` to ``d1``; where it is negative the pair serves θ + π. The F0 terms
+    are six times the mean (``a0² + a0 a1 + a1²``): the walk divides their sum by 6 once.
     """
     if d0 * d1 < 0.0:
         top = d0 if d0 > d1 else d1
@@ -227,16 +228,16 @@ def _f0_f2_terms(d0: float, d1: float, weight: float) -> tuple[float, float, flo
         w_neg = weight * (1.0 - frac)
         nb = -bottom
         return (
-            w_pos * (top * top / 6.0),
+            w_pos * (top * top),
             w_pos * _mean_f2(0.0, top),
-            w_neg * (nb * nb / 6.0),
+            w_neg * (nb * nb),
             w_neg * _mean_f2(0.0, nb),
         )
     if d0 + d1 < 0.0:
         a0 = -d0
         a1 = -d1
-        return 0.0, 0.0, weight * ((a0 * a0 + a0 * a1 + a1 * a1) / 6.0), weight * _mean_f2(a0, a1)
-    return weight * ((d0 * d0 + d0 * d1 + d1 * d1) / 6.0), weight * _mean_f2(d0, d1), 0.0, 0.0
+        return 0.0, 0.0, weight * (a0 * a0 + a0 * a1 + a1 * a1), weight * _mean_f2(a0, a1)
+    return weight * (d0 * d0 + d0 * d1 + d1 * d1), weight * _mean_f2(d0, d1), 0.0, 0.0
 
 
 @jit
@@ -323,7 +324,7 @@ def _walk_f0_f2(
             p0 += y0_
             p2 += y2
             ii += 1
-    return t0, t2, p0, p2
+    return t0 / 6.0, t2, p0 / 6.0, p2
 
 
 @jit

@@ -54,7 +54,8 @@ def _project(
 
 @jit
 def _bucket(tab: np.ndarray, perm: np.ndarray, keys: np.ndarray, lo_g: int, hi_g: int) -> None:
-    """Stable counting sort of ``perm[lo_g:hi_g]`` into ``n`` equal-width buckets of ``v_lo``."""
+    """Stable counting sort of ``perm[lo_g:hi_g]`` into ``n`` equal-width buckets of ``v_lo``;
+    ``keys[lo_g:hi_g]`` are the ``v_lo`` of ``perm`` in the order it leaves."""
     n = hi_g - lo_g
     vmin = math.inf
     vmax = -math.inf
@@ -64,7 +65,7 @@ def _bucket(tab: np.ndarray, perm: np.ndarray, keys: np.ndarray, lo_g: int, hi_g
         vmin = min(vmin, v)
         vmax = max(vmax, v)
     if not vmax > vmin:
-        return
+        return  # keys already follow perm
     scale = (n - 1) / (vmax - vmin)
     counts = np.zeros(n + 1, dtype=np.int64)
     slot = np.empty(n, dtype=np.int64)
@@ -76,12 +77,15 @@ def _bucket(tab: np.ndarray, perm: np.ndarray, keys: np.ndarray, lo_g: int, hi_g
     for k in range(n):
         counts[k + 1] += counts[k]
     moved = np.empty(n, dtype=np.int64)
+    moved_keys = np.empty(n)
     for j in range(n):
         k = slot[j]
         moved[counts[k]] = perm[lo_g + j]
+        moved_keys[counts[k]] = keys[lo_g + j]
         counts[k] += 1
     for j in range(n):
         perm[lo_g + j] = moved[j]
+        keys[lo_g + j] = moved_keys[j]
 
 
 @jit
@@ -104,9 +108,10 @@ def _order(
             perm[lo_g + j] = lo_g + order[j]
         return
     if hi_g - lo_g > BUCKET_SORT_FROM:
-        _bucket(tab, perm, keys, lo_g, hi_g)
-    for j in range(lo_g, hi_g):
-        keys[j] = tab[perm[j], 0]
+        _bucket(tab, perm, keys, lo_g, hi_g)  # leaves the keys in perm's new order
+    else:
+        for j in range(lo_g, hi_g):
+            keys[j] = tab[perm[j], 0]
     for j in range(lo_g + 1, hi_g):
         kv = keys[j]
         if keys[j - 1] <= kv:
