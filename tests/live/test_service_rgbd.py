@@ -66,6 +66,19 @@ def test_rgbd_describe_is_the_cli_json(server, live_data, capsys) -> None:
     assert text.status_code == 200 and text.text.startswith("The ")
 
 
+def test_rgbd_npy_depth_in_metres(server, live_data) -> None:
+    p = _paths(live_data, 5)
+    mm = cv2.imread(str(p["depth"]), cv2.IMREAD_UNCHANGED)
+    metres = np.where(mm > 0, mm.astype(np.float32) * np.float32(0.001), np.nan).astype(np.float32)
+    with httpx.Client(base_url=server, timeout=120) as c:
+        png = c.post("/api/describe", files=_upload(p)).json()
+        npy = c.post("/api/describe", files={**_upload(p), "depth": ("d.npy", _npy(metres))})
+    assert npy.status_code == 200, npy.text
+    a, b = png["objects"], npy.json()["objects"]
+    assert [(o["name"], o["kept_pixels"]) for o in a] == [(o["name"], o["kept_pixels"]) for o in b]
+    assert np.allclose([o["centroid"] for o in a], [o["centroid"] for o in b], atol=1e-6)
+
+
 def test_rgbd_ask_is_the_cli_answer(server, live_data, capsys) -> None:
     p = _paths(live_data, 5)
     question = "where is the tin?"
@@ -141,6 +154,8 @@ def test_bad_rgbd_uploads_are_one_line_4xx(server, live_data) -> None:
                 name,
                 body["error"],
             )
+        huge = c.post("/api/describe", files=cases["npy header 10000x10000"])
+        assert huge.status_code == 413 and "10000x10000" in huge.json()["error"], huge.text
         bad = c.post("/api/describe", files=cases["depth of another size"]).json()["error"]
         assert bad.startswith("depth") and "10" in bad, bad
         r = c.post("/api/describe", files=good, data={"depth_scale": "abc"})

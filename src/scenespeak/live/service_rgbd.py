@@ -58,7 +58,12 @@ def _depth_suffix(data: bytes, lim: ServiceLimits) -> str:
         try:
             f = io.BytesIO(data)
             version = np.lib.format.read_magic(f)
-            shape, _, _ = np.lib.format._read_array_header(f, version)  # type: ignore[attr-defined]
+            read = (
+                np.lib.format.read_array_header_1_0
+                if version == (1, 0)
+                else np.lib.format.read_array_header_2_0
+            )
+            shape, _, _ = read(f)
         except Exception as exc:  # numpy raises ValueError and kin for broken headers
             raise RequestProblem(400, f"depth: a broken .npy header ({exc})") from None
         if len(shape) != 2:
