@@ -66,6 +66,36 @@ def test_rgbd_describe_is_the_cli_json(server, live_data, capsys) -> None:
     assert text.status_code == 200 and text.text.startswith("The ")
 
 
+def test_rgbd_boxes_and_estimated_up_are_the_cli_json(server, live_data, tmp_path, capsys) -> None:
+    p = _paths(live_data, 5)
+    inst = cv2.imread(str(p["masks"]), cv2.IMREAD_UNCHANGED)
+    labels = json.loads(p["labels"].read_text())
+    dets = []
+    for key, label in labels.items():
+        ys, xs = np.nonzero(inst == int(key))
+        x0, y0 = int(xs.min()), int(ys.min())
+        dets.append(
+            {"bbox": [x0, y0, int(xs.max()) - x0 + 1, int(ys.max()) - y0 + 1], "label": label}
+        )
+    boxes = tmp_path / "boxes.json"
+    boxes.write_text(json.dumps(dets))
+    cli = _cli(
+        ["describe", p["color"], "--depth", p["depth"], "--intrinsics", p["intrinsics"],
+         "--boxes", boxes, "--estimate-up"], capsys,
+    )  # fmt: skip
+    files = {
+        **_upload(p, ("color", "depth", "intrinsics")),
+        "boxes": ("b.json", boxes.read_bytes()),
+    }
+    with httpx.Client(base_url=server, timeout=120) as c:
+        r = c.post("/api/describe", files=files, data={"estimate_up": "true"})
+    assert r.status_code == 200, r.text
+    assert without_timings(r.json()) == without_timings(cli)
+    assert r.json()["up_source"] == "estimated" and {o["source"] for o in r.json()["objects"]} == {
+        "box"
+    }
+
+
 def test_rgbd_npy_depth_in_metres(server, live_data) -> None:
     p = _paths(live_data, 5)
     mm = cv2.imread(str(p["depth"]), cv2.IMREAD_UNCHANGED)
