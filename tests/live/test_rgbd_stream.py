@@ -96,3 +96,33 @@ def test_bad_frames_leave_the_stream_as_it_was() -> None:
         stream.process(depth)
     empty = stream.process(depth, np.zeros_like(masks), {}).to_dict()
     assert [o["status"] for o in empty["objects"]] == ["out of view"]
+
+
+def _msg(enc: str, a: np.ndarray, bigendian: bool = False):
+    from types import SimpleNamespace
+
+    h, w = a.shape
+    return SimpleNamespace(
+        height=h, width=w, encoding=enc, step=a.itemsize * w, is_bigendian=int(bigendian),
+        data=np.frombuffer(a.tobytes(), np.uint8),
+    )  # fmt: skip
+
+
+def test_ros_depth_and_mask_encodings() -> None:
+    from scenespeak.live.rgbd_sources import _depth_from_msg, _masks_from_msg
+
+    mm = np.array([[0, 1000], [1500, 65535]], np.uint16)
+    d = _depth_from_msg(_msg("16UC1", mm.astype("<u2")), 0.001)
+    assert np.isnan(d[0, 0]) and d[0, 1] == pytest.approx(1.0) and d[1, 0] == pytest.approx(1.5)
+    big = _depth_from_msg(_msg("16UC1", mm.astype(">u2"), bigendian=True), 0.001)
+    assert np.array_equal(np.nan_to_num(big), np.nan_to_num(d))
+    f = _depth_from_msg(_msg("32FC1", np.array([[np.nan, 1.0], [1.5, 2.0]], "<f4")), 0.001)
+    assert np.isnan(f[0, 0]) and f[1, 1] == pytest.approx(2.0)
+    m = _masks_from_msg(_msg("mono16", np.array([[0, 3], [300, 3]], "<u2")))
+    assert m.dtype == np.int32 and m.tolist() == [[0, 3], [300, 3]]
+    with pytest.raises(ValueError, match="not supported"):
+        _depth_from_msg(_msg("rgb8", np.zeros((2, 2), np.uint8)), 0.001)
+    short = _msg("16UC1", mm)
+    short.data = short.data[:3]
+    with pytest.raises(ValueError, match="only 3 bytes"):
+        _depth_from_msg(short, 0.001)
