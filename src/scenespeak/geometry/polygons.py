@@ -1,10 +1,11 @@
-"""Polygon geometry shared by the spatial half: area, convexity, clipping, exact overlap.
+"""Polygon geometry shared by both halves: area, centroid, convexity, clipping, exact overlap.
 
 One implementation of each: the cyclic shift (:func:`cyclic_next`), the shoelace area
-(:func:`polygon_area`), and the exact area of the intersection of two simple polygons, convex or
-not (:func:`exact_intersection_area`, Green's theorem on the boundary pieces of each polygon
-inside the other). The force histograms (:mod:`scenespeak.spatial.forces`) use them on their
-oriented boundary edges; anything with ``start``/``end`` edge arrays (a :class:`Boundary`) can.
+(:func:`polygon_area`), the area centroid (:func:`polygon_centroid`), and the exact area of the
+intersection of two simple polygons, convex or not (:func:`exact_intersection_area`, Green's
+theorem on the boundary pieces of each polygon inside the other). The force histograms
+(:mod:`scenespeak.spatial.forces`) use them on their oriented boundary edges; anything with
+``start``/``end`` edge arrays (a :class:`Boundary`) can.
 """
 
 from __future__ import annotations
@@ -72,6 +73,26 @@ def polygon_area(p: NDArray[np.float64]) -> float:
             x, y = x - x[0], y - y[0]
             area = 0.5 * float(np.dot(x, _shift(y)) - np.dot(_shift(x), y))
     return area
+
+
+def polygon_centroid(p: ArrayLike) -> NDArray[np.float64]:
+    """Area centroid of a simple polygon (shoelace); the vertex mean when the area is zero.
+
+    Examples
+    --------
+    >>> polygon_centroid([[0.0, 0.0], [2.0, 0.0], [2.0, 1.0], [0.0, 1.0]]).tolist()
+    [1.0, 0.5]
+    """
+    q = np.asarray(p, dtype=np.float64)
+    if len(q) < 3:
+        return q.mean(axis=0)
+    x, y = q[:, 0], q[:, 1]
+    xn, yn = np.roll(x, -1), np.roll(y, -1)
+    cross = x * yn - xn * y
+    area = cross.sum() / 2.0
+    if abs(area) < 1e-15:
+        return q.mean(axis=0)
+    return np.array([((x + xn) * cross).sum(), ((y + yn) * cross).sum()]) / (6.0 * area)
 
 
 def is_convex(p: NDArray[np.float64]) -> bool:

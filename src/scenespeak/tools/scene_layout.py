@@ -15,6 +15,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from scenespeak.errors import InputError
+from scenespeak.geometry.polygons import polygon_area, polygon_centroid
 from scenespeak.tools.render import (
     Camera,
 )
@@ -65,8 +66,8 @@ def _raster(poly: NDArray[np.float64], size: tuple[int, int], scale: float) -> N
 
 
 def _poly_area(poly: NDArray[np.float64]) -> float:
-    x, y = poly[:, 0], poly[:, 1]
-    return 0.5 * abs(float(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1))))
+    """Unsigned shoelace area (``geometry.polygons.polygon_area``)."""
+    return abs(polygon_area(np.asarray(poly, dtype=np.float64)))
 
 
 def footprint_relation(
@@ -92,7 +93,7 @@ def footprint_relation(
     >>> footprint_relation(sq + [0, 3], sq)[0]
     'behind'
     """
-    ca, cr = _poly_centroid(argument), _poly_centroid(referent)
+    ca, cr = polygon_centroid(argument), polygon_centroid(referent)
     v = ca - cr
     angle = float(np.degrees(np.arctan2(v[1], v[0])) % 360.0)
     names = ("right", "behind", "left", "front")
@@ -101,17 +102,6 @@ def footprint_relation(
     diagonal = off > 45.0 - DIAGONAL_TOLERANCE_DEG
     overlap = _sat_gap(np.asarray(argument, float), np.asarray(referent, float)) <= 0
     return primary, angle, bool(diagonal or overlap)
-
-
-def _poly_centroid(poly: NDArray[np.float64]) -> NDArray[np.float64]:
-    p = np.asarray(poly, float)
-    x, y = p[:, 0], p[:, 1]
-    xn, yn = np.roll(x, -1), np.roll(y, -1)
-    cross = x * yn - xn * y
-    a = cross.sum() / 2
-    if abs(a) < 1e-15:
-        return p.mean(axis=0)
-    return np.array([((x + xn) * cross).sum(), ((y + yn) * cross).sum()]) / (6 * a)
 
 
 # --------------------------------------------------------------------------------------------

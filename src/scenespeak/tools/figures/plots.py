@@ -11,6 +11,7 @@ from matplotlib.figure import Figure
 from numpy.typing import ArrayLike, NDArray
 
 from scenespeak.errors import InputError
+from scenespeak.geometry.polygons import polygon_centroid
 from scenespeak.tools.figures._style import (
     Color,
     FigureStyle,
@@ -185,18 +186,6 @@ def plot_points_3d(
     return fig
 
 
-def _polygon_centroid(poly: NDArray[np.float64]) -> NDArray[np.float64]:
-    if len(poly) < 3:
-        return poly.mean(axis=0)
-    x, y = poly[:, 0], poly[:, 1]
-    xn, yn = np.roll(x, -1), np.roll(y, -1)
-    cross = x * yn - xn * y
-    area = cross.sum() / 2.0
-    if abs(area) < 1e-15:
-        return poly.mean(axis=0)
-    return np.array([((x + xn) * cross).sum(), ((y + yn) * cross).sum()]) / (6.0 * area)
-
-
 def plot_hulls(
     hulls: Mapping[str, ArrayLike],
     points: Mapping[str, ArrayLike] | None = None,
@@ -295,7 +284,7 @@ def _draw_hull(ax: Any, lab: str, poly: NDArray[np.float64], col: Color) -> None
         ax.add_patch(Polygon(poly, closed=True, fc=(*col[:3], 0.3), ec=col, lw=2.0))
     else:
         ax.plot(poly[:, 0], poly[:, 1], "-o", color=col, lw=2.0)
-    cx, _ = _polygon_centroid(poly)
+    cx, _ = polygon_centroid(poly)
     ax.annotate(
         lab,
         (cx, float(poly[:, 1].max())),
