@@ -57,6 +57,25 @@ def _copy_frames(src: Path, dst: Path, n: int) -> Path:
     return dst
 
 
+def test_flat_layout_gives_the_subfolders_lines(live_data, tmp_path, capsys) -> None:
+    flat = tmp_path / "flat"
+    flat.mkdir()
+    shutil.copy(live_data.sequence / "intrinsics.json", flat / "intrinsics.json")
+    for k in range(4):
+        d = live_data.sequence / f"{k:04d}"
+        for src, dst in (("left.png", "color"), ("depth.png", "depth"), ("masks.png", "masks")):
+            shutil.copy(d / src, flat / f"{dst}_{k:04d}.png")
+        shutil.copy(d / "labels.json", flat / f"labels_{k:04d}.json")
+    code, lines, err = _run(["watch", "--rgbd", flat], capsys)
+    assert code == 0, err
+    code, ref, err = _run(
+        ["watch", "--rgbd", _copy_frames(live_data.sequence, tmp_path / "s", 4)], capsys
+    )
+    assert code == 0, err
+    strip = [{k: v for k, v in ln.items() if k != "timings_ms"} for ln in lines]
+    assert strip == [{k: v for k, v in ln.items() if k != "timings_ms"} for ln in ref]
+
+
 def test_a_broken_frame_is_one_warning_and_the_stream_goes_on(live_data, tmp_path, capsys) -> None:
     d = _copy_frames(live_data.sequence, tmp_path / "seq", 4)
     (d / "0001" / "depth.png").write_bytes(b"not a png")

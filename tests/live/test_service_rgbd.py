@@ -96,6 +96,24 @@ def test_rgbd_boxes_and_estimated_up_are_the_cli_json(server, live_data, tmp_pat
     }
 
 
+def test_rgbd_intrinsics_as_ros_camera_info_yaml(server, live_data) -> None:
+    p = _paths(live_data, 5)
+    cam = json.loads(p["intrinsics"].read_text())
+    yaml = (
+        f"image_width: {cam['width']}\nimage_height: {cam['height']}\ncamera_name: left\n"
+        "camera_matrix:\n  rows: 3\n  cols: 3\n"
+        f"  data: [{cam['fx']}, 0, {cam['cx']}, 0, {cam['fy']}, {cam['cy']}, 0, 0, 1]\n"
+        "distortion_model: plumb_bob\ndistortion_coefficients:\n  rows: 1\n  cols: 5\n"
+        "  data: [0, 0, 0, 0, 0]\n"
+    )
+    with httpx.Client(base_url=server, timeout=120) as c:
+        r = c.post("/api/describe", files={**_upload(p), "intrinsics": ("cam.yaml", yaml.encode())})
+    assert r.status_code == 200, r.text
+    # no up in camera_info: estimated from the floor, the objects as with the JSON intrinsics
+    assert r.json()["up_source"] == "estimated"
+    assert {o["name"] for o in r.json()["objects"]} == {"box", "book", "tin"}
+
+
 def test_rgbd_npy_depth_in_metres(server, live_data) -> None:
     p = _paths(live_data, 5)
     mm = cv2.imread(str(p["depth"]), cv2.IMREAD_UNCHANGED)
