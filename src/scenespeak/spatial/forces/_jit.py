@@ -11,13 +11,15 @@ the kernel is compiled in memory for each process: slower to start, never an err
 Loading is not free: importing Numba and loading the cached kernel cost a process about a
 second of CPU (``benchmarks/bench_startup.py``: 1.45 s against 0.21 s for the reference's
 first histogram, at load 10), while the NumPy reference computes a small
-pair in well under a millisecond. So by default (``SCENESPEAK_NUMBA=auto``) a process uses the
-reference until the work it has given the force sweep would have paid for loading Numba: as
-soon as one call, or the calls so far together, are estimated to cost the reference
-:data:`LOAD_SECONDS` (:func:`reference_seconds`, measured), Numba is loaded and used from then
-on. The few histograms of a short command cost what the reference costs; a scene of a hundred
-objects, a stream or a dataset runs compiled from its first call (or after about a second).
-Both give the same histograms to 1e-9 relative (``tests/spatial/test_forces_kernel.py``).
+pair in well under a millisecond. So by default (``SCENESPEAK_NUMBA=auto``) a sweep runs
+compiled when that one call is estimated to cost the reference at least :data:`LOAD_SECONDS`
+(:func:`reference_seconds`, measured): such a call pays for loading Numba on its own. The
+choice depends on the call only, never on what the process did before, so the same input gives
+the same floats in a short command, a long-running service or a stream (the two kernels agree to
+1e-9 relative, ``tests/spatial/test_forces_kernel.py``, but not bit for bit; a choice that
+remembered earlier calls made ``serve`` and ``describe`` differ in the last digits). The few
+histograms of a short command or of one stream frame cost what the reference costs; a scene of a
+hundred objects runs compiled.
 
 ``SCENESPEAK_NUMBA=always`` loads Numba on the first histogram (benchmarks of the kernel);
 ``SCENESPEAK_NO_NUMBA=1`` (or ``SCENESPEAK_NUMBA=never``) never imports it.
@@ -42,15 +44,11 @@ POLICY_ENV = "SCENESPEAK_NUMBA"
 
 #: CPU seconds that importing Numba and loading the cached kernel cost a process (measured
 #: with ``benchmarks/bench_startup.py``: first histogram 1.45 s with Numba, 0.21 s without, at
-#: load 10; issue 16's first session: 1.37 s against 0.23 s at load 30). Paying for it once the
-#: reference has cost as much is at most twice the better of the two choices made in hindsight.
+#: load 10; issue 16's first session: 1.37 s against 0.23 s at load 30). A call estimated to cost
+#: the reference this much pays for loading Numba on its own.
 LOAD_SECONDS = 1.0
 
 _OPTIONS: dict[str, Any] = {"nogil": True, "error_model": "numpy"}
-
-# What the reference has been asked to do in this process, in estimated seconds (a cache of
-# the decision, like the imported module: it only ever moves a process towards Numba).
-_SPENT = [0.0]
 
 
 def policy() -> str:
@@ -100,14 +98,12 @@ def reference_seconds(pairs: int, work: int) -> float:
 
 
 def wanted(pairs: int, work: int) -> bool:
-    """Whether this sweep should run compiled (loading Numba now if it pays; see above)."""
+    """Whether this sweep should run compiled (loading Numba now if this call pays for it; the
+    choice depends on the call alone, see above)."""
     mode = policy()
     if mode == "never" or not _installed():
         return False
-    if mode == "always" or loaded():
-        return _numba() is not None
-    _SPENT[0] += reference_seconds(pairs, work)
-    if _SPENT[0] >= LOAD_SECONDS:
+    if mode == "always" or reference_seconds(pairs, work) >= LOAD_SECONDS:
         return _numba() is not None
     return False
 
