@@ -176,3 +176,15 @@ def test_rig_from_short_refuses_with_the_fix(args: tuple, kwargs: dict, says: st
 
 def test_rig_from_short_in_millimetres() -> None:
     assert rig_from_short(120.0, 60.0, (320, 240), units="mm").baseline == pytest.approx(0.12)
+
+
+@pytest.mark.parametrize("suffix", [".json", ".yml", ".xml"])
+def test_load_rig_reads_as_untrusted_input(tmp_path: Path, suffix: str) -> None:
+    fifo = tmp_path / f"calib{suffix}"
+    os.mkfifo(fifo)
+    with pytest.raises(CalibrationError, match="FIFO"):
+        load_rig(fifo)  # at once: a FIFO never blocks
+    doctype = tmp_path / "entities.xml"
+    doctype.write_text('<?xml version="1.0"?><!DOCTYPE a [<!ENTITY x "y">]><opencv_storage/>')
+    with pytest.raises(CalibrationError, match="DOCTYPE"):
+        load_rig(doctype)
