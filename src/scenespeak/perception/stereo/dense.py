@@ -1,0 +1,160 @@
+"""Dense disparity of a rectified pair: OpenCV StereoSGBM over a search range from the matches."""
+
+from __future__ import annotations
+
+import math
+
+import cv2
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from scenespeak.errors import ImageError
+from scenespeak.perception.calibration import Rectification
+from scenespeak.perception.features import to_gray
+from scenespeak.perception.stereo.results import DenseDisparity
+
+__all__ = [
+    "SGBM_DISP12_MAX_DIFF",
+    "SGBM_P1_PER_PIXEL",
+    "SGBM_P2_PER_PIXEL",
+    "SGBM_SPECKLE_RANGE",
+    "SGBM_SPECKLE_WINDOW",
+    "dense_disparity",
+]
+
+
+def _disparity_range(
+    rect: Rectification, disparities: NDArray[np.float64] | None, margin: float = 8.0
+) -> tuple[int, int]:
+    """(minDisparity, numDisparities) for SGBM from keypoint disparities, or a default."""
+    w = rect.rig.image_size[0]
+    d = None
+    if disparities is not None and len(disparities) >= 3:
+        # the range of the disparities that at least 3 matches share (within 2 px): isolated
+        # mismatches do not widen it, a near object with a few keypoints stays inside
+        srt = np.sort(np.asarray(disparities, dtype=np.float64))
+        support = np.searchsorted(srt, srt + 2.0, "right") - np.searchsorted(srt, srt - 2.0)
+        d = srt[support >= 3]
+    if d is not None and len(d):
+        lo = float(d.min()) - margin
+        hi = float(d.max()) + margin
+    else:
+        # everything from 0.3 m to infinity, capped at half the image width
+        lo = -rect.doffs
+        hi = lo + min(w / 2.0, rect.focal * rect.baseline / 0.3)
+    lo = max(lo, -rect.doffs)  # nothing behind infinity
+    mn = math.floor(lo)
+    span = min(max(hi - mn, 16.0), max(64.0, w / 2.0))  # at most half the image width
+    num = int(16 * math.ceil(span / 16.0))
+    return mn, num
+
+
+#: SGBM's smoothness penalties per pixel of the block (one gray channel): P1 = 8·bs², P2 =
+#: 32·bs², the values OpenCV's StereoSGBM documentation and its stereo_match sample give.
+SGBM_P1_PER_PIXEL = 8
+SGBM_P2_PER_PIXEL = 32
+#: Left-right check: disparities whose right-to-left match differs by more than 1 px are
+#: dropped (OpenCV's stereo_match sample uses 1).
+SGBM_DISP12_MAX_DIFF = 1
+#: Speckle filter: connected regions of at most 100 px whose disparity varies by at most 2 px
+#: (OpenCV multiplies speckleRange by 16 for its fixed-point map) are noise and removed;
+#: OpenCV's StereoSGBM docs suggest a window "somewhere in the 50-200 range" and a range of
+#: "1 or 2".
+SGBM_SPECKLE_WINDOW = 100
+SGBM_SPECKLE_RANGE = 2
+
+
+def dense_disparity(
+    left: NDArray[np.generic],
+    right: NDArray[np.generic],
+    rect: Rectification,
+    *,
+    min_disparity: int | None = None,
+    num_disparities: int | None = None,
+    keypoint_disparities: ArrayLike | None = None,
+    block_size: int = 3,
+    roi: tuple[int, int, int, int] | None = None,
+    uniqueness: int = 10,
+    pad: int | None = None,
+) -> DenseDisparity:
+    """Dense disparity of the rectified pair with OpenCV StereoSGBM (3-way mode).
+
+    Parameters
+    ----------
+    left, right : ndarray
+        The input images as given (gray or colour); they are rectified here if needed.
+    rect : Rectification
+    min_disparity, num_disparities : int, optional
+        Search range; by default derived from ``keypoint_disparities`` (the range of the values
+        shared by at least 3 of them within 2 px, ± 8 px, at most half the image width) or,
+        without them, from 0.3 m to infinity.
+    keypoint_disparities : array, optional
+        Rectified disparities of sparse matches, to narrow the search (faster, fewer errors).
+    block_size : int
+        SGBM block size (odd).
+    roi : (x0, y0, x1, y1), optional
+        Only compute for this part of the rectified left image (others are NaN); much faster
+        for one small object.
+    uniqueness : int
+        SGBM's uniquenessRatio (percent margin of the best cost over the second best).
+    pad : int, optional
+        With ``roi``: pixels of context computed around it (and then dropped), so that SGBM's
+        path costs have settled at the region's border (default ``block_size // 2 + 2``).
+
+    Returns
+    -------
+    DenseDisparity
+        Left-right checked (``disp12MaxDiff = 1``), speckles removed; NaN where unknown.
+    """
+    gl = to_gray(left)
+    gr = to_gray(right)
+    if gl.shape != gr.shape:
+        raise ImageError("dense_disparity", f"images differ in size: {gl.shape} vs {gr.shape}")
+    gl, gr = (np.asarray(g, dtype=np.uint8) for g in rect.rectify_images(gl, gr))
+    h, w = gl.shape
+    kd = None if keypoint_disparities is None else np.asarray(keypoint_disparities, float)
+    mn_auto, num_auto = _disparity_range(rect, kd)
+    mn = mn_auto if min_disparity is None else int(min_disparity)
+    num = num_auto if num_disparities is None else int(num_disparities)
+    num = int(16 * max(1, math.ceil(num / 16)))
+    x0, y0, x1, y1 = (0, 0, w, h) if roi is None else roi
+    x0, x1 = max(0, int(x0)), min(w, math.ceil(x1))
+    y0, y1 = max(0, int(y0)), min(h, math.ceil(y1))
+    out = np.full((h, w), np.nan, np.float32)
+    box = None if roi is None else (x0, y0, x1, y1)
+    if x1 <= x0 or y1 <= y0:
+        return DenseDisparity(out, rect, mn, num, box)
+    pad = block_size // 2 + 2 if pad is None else max(0, int(pad))
+    # A crop: rows y0..y1; columns from far enough left that every disparity can be searched.
+    # OpenCV computes nothing in the first minDisparity + numDisparities columns of its input;
+    # where the crop would have to start left of the image, black columns stand in, so that
+    # the image's own left part gets the disparities its right-image partners allow (pixels
+    # whose partner would lie in the black band match nothing there).
+    xa = x0 - max(0, mn + num)
+    border = max(0, -xa)
+    xa = max(0, xa)
+    ya, yb = max(0, y0 - pad), min(h, y1 + pad)
+    xb = min(w, x1 + pad)
+    cl = np.ascontiguousarray(gl[ya:yb, xa:xb])
+    cr = np.ascontiguousarray(gr[ya:yb, xa:xb])
+    if border:
+        cl = np.asarray(cv2.copyMakeBorder(cl, 0, 0, border, 0, cv2.BORDER_CONSTANT, value=0))
+        cr = np.asarray(cv2.copyMakeBorder(cr, 0, 0, border, 0, cv2.BORDER_CONSTANT, value=0))
+    bs = int(block_size) | 1
+    sgbm = cv2.StereoSGBM_create(  # type: ignore[attr-defined]
+        minDisparity=mn,
+        numDisparities=num,
+        blockSize=bs,
+        P1=SGBM_P1_PER_PIXEL * bs * bs,
+        P2=SGBM_P2_PER_PIXEL * bs * bs,
+        disp12MaxDiff=SGBM_DISP12_MAX_DIFF,
+        uniquenessRatio=uniqueness,
+        speckleWindowSize=SGBM_SPECKLE_WINDOW,
+        speckleRange=SGBM_SPECKLE_RANGE,
+        mode=cv2.STEREO_SGBM_MODE_SGBM_3WAY,
+    )
+    raw = sgbm.compute(cl, cr)
+    d = raw.astype(np.float32) / 16.0
+    d[raw < mn * 16] = np.nan  # OpenCV marks unknown pixels with (minDisparity - 1) * 16
+    out[y0:y1, x0:x1] = d[y0 - ya : y1 - ya, border + x0 - xa : border + x1 - xa]
+    return DenseDisparity(out, rect, mn, num, box)

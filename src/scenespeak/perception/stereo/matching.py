@@ -1,0 +1,355 @@
+"""Sparse left/right matching: ratio test, epipolar band, cross check, dense verification."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+from numpy.typing import NDArray
+
+from scenespeak.perception.calibration import Rectification
+from scenespeak.perception.features import Features
+from scenespeak.perception.stereo.results import DenseDisparity, StereoMatches
+
+__all__ = ["match_stereo"]
+
+_SAME_PLACE_PX = 2.0  # keypoints closer than this are "the same place" (OpenCV duplicates)
+_CHUNK = 1024  # left descriptors per block of the distance matrix (bounds memory)
+
+
+@dataclass(frozen=True, eq=False)
+class _Candidates:
+    """Nearest right neighbours of every left descriptor, globally and inside the band."""
+
+    g_best: NDArray[np.intp]  # global best right index
+    g_d1: NDArray[np.float32]
+    g_d2: NDArray[np.float32]  # second best at another place (inf if none)
+    b_best: NDArray[np.intp]  # best inside the band (-1 if none)
+    b_d1: NDArray[np.float32]
+    b_d2: NDArray[np.float32]
+    g_back: NDArray[np.intp]  # for each right keypoint, its global best left keypoint
+    b_back: NDArray[np.intp]  # for each right keypoint, its best left keypoint inside the band
+    left_rect: NDArray[np.float64]
+    right_rect: NDArray[np.float64]
+
+
+def _smallest(dist: NDArray[np.float32], k: int) -> NDArray[np.intp]:
+    """Column indices of the k smallest values of each row, sorted."""
+    n, m = dist.shape
+    if k < m:
+        part = np.argpartition(dist, k - 1, axis=1)[:, :k]
+    else:
+        part = np.tile(np.arange(m), (n, 1))
+    return np.take_along_axis(part, np.argsort(np.take_along_axis(dist, part, 1), 1), 1)
+
+
+def _group_best(
+    ii: NDArray[np.intp],
+    jj: NDArray[np.intp],
+    dd: NDArray[np.float32],
+    n: int,
+    rxy: NDArray[np.float64],
+) -> tuple[NDArray[np.intp], NDArray[np.float32], NDArray[np.float32]]:
+    """Best and second best (at another place) per group ``ii`` of candidate pairs."""
+    best = np.full(n, -1, np.intp)
+    d1 = np.full(n, np.inf, np.float32)
+    d2 = np.full(n, np.inf, np.float32)
+    if len(ii) == 0:
+        return best, d1, d2
+    o = np.lexsort((dd, ii))
+    ii, jj, dd = ii[o], jj[o], dd[o]
+    first = np.flatnonzero(np.r_[True, ii[1:] != ii[:-1]])
+    best[ii[first]] = jj[first]
+    d1[ii[first]] = dd[first]
+    far = np.linalg.norm(rxy[jj] - rxy[best[ii]], axis=1) > _SAME_PLACE_PX
+    fi = np.flatnonzero(far)
+    if len(fi):
+        grp = ii[fi]
+        f2 = fi[np.r_[True, grp[1:] != grp[:-1]]]
+        d2[ii[f2]] = dd[f2]
+    return best, d1, d2
+
+
+def _global_block(
+    sq: NDArray[np.float32],
+    s: int,
+    k: int,
+    rxy: NDArray[np.float64],
+    g_best: NDArray[np.intp],
+    g_d1: NDArray[np.float32],
+    g_d2: NDArray[np.float32],
+    col_g: NDArray[np.float32],
+    g_back: NDArray[np.intp],
+) -> None:
+    """Global nearest neighbours of one block of squared distances (fills the arrays)."""
+    n, nr = sq.shape
+    rows = np.arange(n)
+    order = _smallest(sq, k)
+    g_best[s : s + n] = order[:, 0]
+    near = np.sqrt(np.take_along_axis(sq, order, 1))
+    g_d1[s : s + n] = near[:, 0]
+    far = np.linalg.norm(rxy[order] - rxy[order[:, :1]], axis=2) > _SAME_PLACE_PX
+    far[:, 0] = False
+    g_d2[s : s + n] = np.where(far.any(1), near[rows, np.argmax(far, 1)], np.inf)
+    cmin = sq.argmin(0)
+    cval = np.sqrt(sq[cmin, np.arange(nr)])
+    better = cval < col_g
+    col_g[better] = cval[better]
+    g_back[better] = cmin[better] + s
+
+
+def _band_pairs(
+    dl: NDArray[np.float32],
+    dr: NDArray[np.float32],
+    lrect: NDArray[np.float64],
+    rrect: NDArray[np.float64],
+    band_px: float,
+    lo_disp: float,
+    hi_disp: float | None,
+    chunk: int = 256,
+) -> tuple[NDArray[np.intp], NDArray[np.intp], NDArray[np.float32]]:
+    """All (left, right, distance) pairs inside the epipolar band and disparity range.
+
+    Left keypoints are taken in row order in blocks; each block is compared only with the right
+    keypoints in its band of rows (a slice of the row-sorted right keypoints), so the cost is a
+    fraction of the full distance matrix.
+    """
+    nl = len(dl)
+    lo_order = np.argsort(lrect[:, 1], kind="stable")
+    ro = np.argsort(rrect[:, 1], kind="stable")
+    ry = rrect[ro, 1]
+    drs = dr[ro]
+    rns = (drs * drs).sum(1)
+    pi: list[NDArray[np.intp]] = []
+    pj: list[NDArray[np.intp]] = []
+    pd: list[NDArray[np.float32]] = []
+    for s in range(0, nl, chunk):
+        li = lo_order[s : s + chunk]
+        ly = lrect[li, 1]
+        a = int(np.searchsorted(ry, ly.min() - band_px, "left"))
+        b = int(np.searchsorted(ry, ly.max() + band_px, "right"))
+        if b <= a:
+            continue
+        q = dl[li]
+        sq = (q * q).sum(1)[:, None] + rns[None, a:b] - 2.0 * (q @ drs[a:b].T)
+        ok = np.abs(ly[:, None] - ry[None, a:b]) <= band_px
+        dsp = lrect[li, 0][:, None] - rrect[ro[a:b], 0][None, :]
+        ok &= dsp > lo_disp
+        if hi_disp is not None:
+            ok &= dsp <= hi_disp
+        ii, jj = np.nonzero(ok)
+        pi.append(li[ii])
+        pj.append(ro[a + jj])
+        pd.append(np.sqrt(np.maximum(sq[ii, jj], 0.0)).astype(np.float32))
+    if not pi:
+        return np.zeros(0, np.intp), np.zeros(0, np.intp), np.zeros(0, np.float32)
+    return np.concatenate(pi), np.concatenate(pj), np.concatenate(pd)
+
+
+def _candidates(
+    fl: Features,
+    fr: Features,
+    rect: Rectification,
+    band_px: float,
+    min_disparity: float,
+    max_disparity: float | None,
+    *,
+    need_global: bool = True,
+) -> _Candidates:
+    """Global and in-band nearest neighbours.
+
+    The global search (blocked full distance matrix) keeps the ``k`` nearest right descriptors
+    of each left one and the best left one of each right one; the band search compares each
+    left keypoint only with the right keypoints in its band of rows.
+    """
+    lrect = rect.rectify_points(fl.xy, "left")
+    rrect = rect.rectify_points(fr.xy, "right")
+    nl, nr = len(fl), len(fr)
+    dl = fl.descriptors.astype(np.float32)
+    dr = fr.descriptors.astype(np.float32)
+    g_best = np.zeros(nl, np.intp)
+    g_d1 = np.full(nl, np.inf, np.float32)
+    g_d2 = np.full(nl, np.inf, np.float32)
+    col_g = np.full(nr, np.inf, np.float32)
+    g_back = np.zeros(nr, np.intp)
+    if need_global:
+        rn = (dr * dr).sum(1)
+        k = min(4, nr)
+        for s in range(0, nl, _CHUNK):
+            q = dl[s : s + _CHUNK]
+            sq = (q * q).sum(1)[:, None] + rn[None, :] - 2.0 * (q @ dr.T)
+            np.maximum(sq, 0.0, out=sq)
+            _global_block(sq, s, k, fr.xy, g_best, g_d1, g_d2, col_g, g_back)
+    doffs = rect.doffs
+    bi, bj, bd = _band_pairs(
+        dl,
+        dr,
+        lrect,
+        rrect,
+        band_px,
+        min_disparity - doffs,
+        None if max_disparity is None else max_disparity - doffs,
+    )
+    b_best, b_d1, b_d2 = _group_best(bi, bj, bd, nl, fr.xy)
+    b_back, _, _ = _group_best(bj, bi, bd, nr, fl.xy)
+    return _Candidates(g_best, g_d1, g_d2, b_best, b_d1, b_d2, g_back, b_back, lrect, rrect)
+
+
+def _select(
+    c: _Candidates,
+    fl: Features,
+    rect: Rectification,
+    *,
+    search: Literal["global", "band"],
+    ratio: float,
+    band_px: float,
+    min_disparity: float,
+    max_disparity: float | None,
+    mutual: bool,
+) -> StereoMatches:
+    nl = len(c.g_best)
+    li = np.arange(nl)
+    if search == "global":
+        ri = c.g_best
+        d1, d2, back = c.g_d1, c.g_d2, c.g_back
+        ok = d1 < ratio * d2
+        dy = np.abs(c.left_rect[:, 1] - c.right_rect[ri, 1]) if nl else np.zeros(0)
+        disp = (c.left_rect[:, 0] - c.right_rect[ri, 0] + rect.doffs) if nl else np.zeros(0)
+        ok &= (dy <= band_px) & (disp > min_disparity)
+        if max_disparity is not None:
+            ok &= disp <= max_disparity
+    else:
+        ri = np.where(c.b_best >= 0, c.b_best, 0)
+        d1, d2, back = c.b_d1, c.b_d2, c.b_back
+        ok = (c.b_best >= 0) & (d1 < ratio * d2)
+    if mutual and nl:
+        bl = back[ri]
+        ok &= (bl >= 0) & (
+            np.linalg.norm(fl.xy[np.maximum(bl, 0)] - fl.xy, axis=1) <= _SAME_PLACE_PX
+        )
+    li, ri = li[ok], ri[ok]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        rat = np.where(np.isfinite(d2[ok]), d1[ok] / d2[ok], 0.0).astype(np.float32)
+    return StereoMatches(
+        li.astype(np.intp),
+        ri.astype(np.intp),
+        c.left_rect[li],
+        c.right_rect[ri],
+        d1[ok].astype(np.float32),
+        rat,
+    )
+
+
+def _verify_dense(
+    m: StereoMatches, dense: DenseDisparity, tol: float, edge_px: float, window: int
+) -> NDArray[np.bool_]:
+    """Matches whose disparity agrees with the dense map and that sit on no depth edge."""
+    disp = dense.disparity
+    h, w = disp.shape
+    if len(m) == 0:
+        return np.zeros(0, bool)
+    c = np.rint(m.left_rect).astype(np.intp)
+    inside = (c[:, 0] >= 0) & (c[:, 0] < w) & (c[:, 1] >= 0) & (c[:, 1] < h)
+    r = window // 2
+    off = np.arange(-r, r + 1)
+    ys = np.clip(c[:, 1, None, None] + off[None, :, None], 0, h - 1)
+    xs = np.clip(c[:, 0, None, None] + off[None, None, :], 0, w - 1)
+    patch = disp[ys, xs].reshape(len(m), -1)
+    centre = disp[np.clip(c[:, 1], 0, h - 1), np.clip(c[:, 0], 0, w - 1)]
+    with np.errstate(invalid="ignore"):
+        agree = np.abs(centre - m.disparity) <= tol
+        finite = np.all(np.isfinite(patch), axis=1)
+        rng = np.where(finite, np.ptp(np.where(finite[:, None], patch, 0.0), axis=1), np.inf)
+        smooth = rng <= edge_px
+    return inside & agree & smooth
+
+
+def match_stereo(
+    features_left: Features,
+    features_right: Features,
+    rect: Rectification,
+    *,
+    ratio: float = 0.6,
+    band_px: float = 1.5,
+    min_disparity: float = 0.0,
+    max_disparity: float | None = None,
+    mutual: bool = True,
+    search: Literal["auto", "global", "band"] = "auto",
+    band_ratio: float = 0.8,
+    dense: DenseDisparity | None = None,
+    dense_tol_px: float = 0.75,
+    edge_px: float = 1.0,
+    edge_window: int = 5,
+) -> StereoMatches:
+    """Match left to right keypoints of a stereo pair.
+
+    Parameters
+    ----------
+    features_left, features_right : Features
+        SIFT features of the input images (as given, not rectified).
+    rect : Rectification
+        From :func:`~scenespeak.perception.calibration.rectify`.
+    ratio : float
+        Lowe's ratio test: best distance < ``ratio`` × second best (0.6 as in the paper).
+        Keypoints at the same place as the best (OpenCV's duplicates with another orientation)
+        are not taken as the second best.
+    band_px : float
+        Epipolar band: largest row difference in rectified pixels.
+    min_disparity, max_disparity : float
+        Accepted range of the depth-giving disparity ``x_l − x_r + doffs`` (> min, <= max).
+    mutual : bool
+        Cross check: the right keypoint's best left keypoint must be the same one.
+    search : {"auto", "global", "band"}
+        ``"global"``: the paper's test, best and second best over all right keypoints, then the
+        band. ``"band"``: best and second best inside the band. ``"auto"``: band when ``dense``
+        is given (the dense check removes what the weaker test lets through), else global.
+    band_ratio : float
+        The ratio used by the band search (its second best is nearer than a global one, so
+        the same value would be stricter).
+    dense : DenseDisparity, optional
+        Verify matches against a dense map: keep a match when the dense disparity at the left
+        keypoint agrees within ``dense_tol_px`` and the dense map varies by at most ``edge_px``
+        in the ``edge_window`` × ``edge_window`` pixels around it (no depth edge, no hole).
+
+    Returns
+    -------
+    StereoMatches
+        Possibly empty (e.g. textureless images).
+    """
+    if not 0.0 < ratio <= 1.0:
+        raise ValueError(f"ratio must be in (0, 1], got {ratio}")
+    if len(features_left) == 0 or len(features_right) == 0:
+        return _no_matches()
+    mode: Literal["global", "band"] = (
+        ("band" if dense is not None else "global") if search == "auto" else search
+    )
+    cand = _candidates(
+        features_left,
+        features_right,
+        rect,
+        band_px,
+        min_disparity,
+        max_disparity,
+        need_global=mode == "global",
+    )
+    m = _select(
+        cand,
+        features_left,
+        rect,
+        search=mode,
+        ratio=ratio if mode == "global" else band_ratio,
+        band_px=band_px,
+        min_disparity=min_disparity,
+        max_disparity=max_disparity,
+        mutual=mutual,
+    )
+    if dense is not None:
+        m = m.subset(_verify_dense(m, dense, dense_tol_px, edge_px, edge_window))
+    return m
+
+
+def _no_matches() -> StereoMatches:
+    z = np.zeros(0, np.intp)
+    zf = np.zeros(0, np.float32)
+    return StereoMatches(z, z.copy(), np.zeros((0, 2)), np.zeros((0, 2)), zf, zf.copy())
