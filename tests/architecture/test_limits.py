@@ -28,7 +28,6 @@ KNOWN: dict[tuple[str, str, str], int] = {
     # a typer command: one parameter per CLI option
     ("parameters", "cli/describe.py", "describe_cmd"): 25,
     # owned by the spatial-speed issue (16): the forces package
-    ("complexity", "spatial/forces/regions.py", "_polygon_region"): 17,
     ("parameters", "spatial/forces/_sweep.py", "sweep"): 10,
     # not split yet (see the note of issue 9)
     ("lines", "perception/calibration.py", ""): 900,
@@ -47,8 +46,6 @@ KNOWN: dict[tuple[str, str, str], int] = {
     ("complexity", "perception/calibfiles.py", "_check_matrices"): 17,
     ("complexity", "perception/masks.py", "instances_from_array"): 19,
     ("complexity", "safeio.py", "_yaml_walk"): 17,
-    ("complexity", "spatial/dialogue/answers.py", "_what"): 16,
-    ("complexity", "tools/dialogue_eval.py", "_score_scene"): 28,
     ("complexity", "tools/fuzz/apicases.py", "_histogram_cases"): 20,
     ("complexity", "tools/fuzz/options.py", "options"): 19,
     ("complexity", "tools/fuzz/runner.py", "_classify_error"): 19,

@@ -29,9 +29,12 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from os import PathLike
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from scenespeak.errors import InputError
+
+if TYPE_CHECKING:
+    from scenespeak.spatial.dialogue.scene import DialogueScene
 
 __all__ = [
     "DIRECTIONS",
@@ -269,20 +272,44 @@ def _sentences(text: str) -> int:
 
 
 def _score_scene(desc: dict[str, Any], truth: dict[str, Any], tally: dict[str, list[Any]]) -> None:
-    from scenespeak.spatial.dialogue import ask, scene_from_dict, summarize
-    from scenespeak.spatial.dialogue.uncertainty import relation_confidence
-    from scenespeak.spatial.dialogue.words import display_name, is_clutter
+    """Score one scene's questions into ``tally`` (yes/no, where, viewer, summary, relations)."""
+    from scenespeak.spatial.dialogue import scene_from_dict
 
     scene = scene_from_dict(desc)
-    names = set(scene.names)
     tobj = {o["label"]: o for o in truth["objects"]}
     trel = {(r["argument"], r["referent"]): r for r in truth["relations"]}
+    _score_yes_no(scene, trel, tally)
+    _score_where(scene, desc, tobj, trel, tally)
+    _score_summary(scene, tally)
+    _score_relations(scene, trel, tally)
+
+
+def _score_yes_no(
+    scene: DialogueScene, trel: dict[tuple[str, str], Any], tally: dict[str, list[Any]]
+) -> None:
+    """The four "is the A <direction> the B?" questions of every clear, described pair."""
+    from scenespeak.spatial.dialogue import ask
+
+    names = set(scene.names)
     for (a, b), r in trel.items():
         if a not in names or b not in names or r["ambiguous"]:
             continue
         for asked in DIRECTIONS:
             q = f"Is the {a} {_PHRASE[asked]} the {b}?"
             tally["yes_no"].append(_yes_no_right(ask(q, scene).answer, asked, r["primary"]))
+
+
+def _score_where(
+    scene: DialogueScene,
+    desc: dict[str, Any],
+    tobj: dict[str, Any],
+    trel: dict[tuple[str, str], Any],
+    tally: dict[str, list[Any]],
+) -> None:
+    """The "where is the X?" question of every described true object, and its viewer side."""
+    from scenespeak.spatial.dialogue import ask
+
+    names = set(scene.names)
     for label, o in tobj.items():
         if label not in names:
             continue
@@ -309,12 +336,27 @@ def _score_scene(desc: dict[str, Any], truth: dict[str, Any], tally: dict[str, l
         v = next((e for e in desc.get("viewer", []) if e["object"] == label), None)
         if v is not None:
             tally["viewer"].append(viewer_consistent(v, o["centroid"][0], o["centroid"][2]))
+
+
+def _score_summary(scene: DialogueScene, tally: dict[str, list[Any]]) -> None:
+    """At most n + 1 sentences naming every object that is not clutter."""
+    from scenespeak.spatial.dialogue import summarize
+    from scenespeak.spatial.dialogue.words import display_name, is_clutter
+
     if scene.objects:
         text = summarize(scene)
         shown = [display_name(x, scene) for x in scene.objects if not is_clutter(x)]
         tally["summary"].append(
             _sentences(text) <= len(shown) + 1 and all(f"the {n}" in text for n in shown)
         )
+
+
+def _score_relations(
+    scene: DialogueScene, trel: dict[tuple[str, str], Any], tally: dict[str, list[Any]]
+) -> None:
+    """Each true relation's described primary direction and its raw and calibrated confidence."""
+    from scenespeak.spatial.dialogue.uncertainty import relation_confidence
+
     for (a, b), r in trel.items():
         rel = scene.relation(a, b)
         if rel is None:

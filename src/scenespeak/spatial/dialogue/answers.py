@@ -372,26 +372,39 @@ def _what(q: Query, scene: DialogueScene) -> Answer:
     ref = _one(q.phrases[0], scene, allow_me=True)
     candidates = [o for o in salient_objects(scene) if ref is None or o.name != ref.name]
     if ref is None:
-        side = {"left": lambda o: bearing_deg(o) < -5, "right": lambda o: bearing_deg(o) > 5}
-        test: Callable[[DialogueObject], bool] = side.get(
-            q.relation, lambda o: q.relation == "front"
-        )
-        hits = [o for o in candidates if test(o)]
-        where = {"left": "on my left", "right": "on my right", "front": "in front of me"}.get(
-            q.relation, f"{relation_phrase(q.relation)} me"
-        )
+        hits, where = _what_of_me(q.relation, candidates)
     else:
-        scored = sorted(
-            ((_matches(o, q.relation, ref, scene), o) for o in candidates), key=lambda t: -t[0]
-        )
-        hits = [o for d, o in scored if d >= 0.5]
-        where = f"{relation_phrase(q.relation)} the {_name(ref, scene)}"
+        hits, where = _what_of(q.relation, ref, candidates, scene)
     about = () if ref is None else (ref.name,)
     if not hits:
         return Answer("", f"Nothing is {where}.", "which", None, about)
     names = join([f"the {_name(o, scene)}" for o in hits])
     verb = "is" if len(hits) == 1 else "are"
     return Answer("", _cap(f"{names} {verb} {where}."), "which", None, tuple(o.name for o in hits))
+
+
+def _what_of_me(
+    relation: str, candidates: list[DialogueObject]
+) -> tuple[list[DialogueObject], str]:
+    """The objects in ``relation`` to the viewer ("what is on my left?") and the phrase for it."""
+    side = {"left": lambda o: bearing_deg(o) < -5, "right": lambda o: bearing_deg(o) > 5}
+    test: Callable[[DialogueObject], bool] = side.get(relation, lambda o: relation == "front")
+    hits = [o for o in candidates if test(o)]
+    where = {"left": "on my left", "right": "on my right", "front": "in front of me"}.get(
+        relation, f"{relation_phrase(relation)} me"
+    )
+    return hits, where
+
+
+def _what_of(
+    relation: str, ref: DialogueObject, candidates: list[DialogueObject], scene: DialogueScene
+) -> tuple[list[DialogueObject], str]:
+    """The objects in ``relation`` to ``ref``, best first, and the phrase for it."""
+    scored = sorted(
+        ((_matches(o, relation, ref, scene), o) for o in candidates), key=lambda t: -t[0]
+    )
+    hits = [o for d, o in scored if d >= 0.5]
+    return hits, f"{relation_phrase(relation)} the {_name(ref, scene)}"
 
 
 def _superlative(q: Query, scene: DialogueScene) -> Answer:

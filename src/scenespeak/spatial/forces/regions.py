@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import NoReturn
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -56,6 +57,33 @@ _Region = Region  # the name tests and older callers use
 
 def _polygon_region(polygon: ArrayLike, name: str) -> Region:
     """Validate a simple polygon given as an ``(N, 2)`` vertex array and orient it CCW."""
+    p = _distinct_vertices(polygon, name)
+    scale = float((p.max(axis=0) - p.min(axis=0)).max())
+    area = _shoelace(p)
+    if scale == 0.0 or abs(area) <= _AREA_TOL * scale * scale:
+        _raise_zero_area(p, scale, name)
+    if area < 0:
+        p = p[::-1].copy()
+        area = -area
+    q = _next(p)
+    convex = _is_convex(p, q, scale)
+    if not convex:
+        _check_simple(p, q, scale, name)
+    n = len(p)
+    idx = np.arange(n)
+    return Region(
+        start=p,
+        end=q,
+        nxt=np.concatenate([idx[1:], idx[:1]]),
+        prv=np.concatenate([idx[n - 1 :], idx[: n - 1]]),
+        area=area,
+        convex=convex,
+        name=name,
+    )
+
+
+def _distinct_vertices(polygon: ArrayLike, name: str) -> FloatArray:
+    """The finite ``(N, 2)`` vertices of ``polygon``, repeated consecutive ones dropped, N >= 3."""
     try:
         p = np.array(polygon, dtype=np.float64)
     except (TypeError, ValueError) as exc:
@@ -79,20 +107,22 @@ def _polygon_region(polygon: ArrayLike, name: str) -> Region:
             p = p[keep]
     if len(p) < 3:
         raise InputError(name, f"a polygon needs at least 3 distinct vertices, got {len(p)}")
-    scale = float((p.max(axis=0) - p.min(axis=0)).max())
-    area = _shoelace(p)
-    if scale == 0.0 or abs(area) <= _AREA_TOL * scale * scale:
-        # A zero signed area with vertices off one line is a self-intersection (a bow tie).
-        d = p - p[0]
-        far = d[np.argmax(np.abs(d).sum(axis=1))]
-        off_line = np.abs(d[:, 0] * far[1] - d[:, 1] * far[0]).max()
-        if scale > 0.0 and float(off_line) > _AREA_TOL * scale * scale:
-            _check_simple(p, _next(p), scale, name)
-        raise InputError(name, "polygon has zero area (all vertices collinear or coincident)")
-    if area < 0:
-        p = p[::-1].copy()
-        area = -area
-    q = _next(p)
+    return p
+
+
+def _raise_zero_area(p: FloatArray, scale: float, name: str) -> NoReturn:
+    """Raise for a polygon of (numerically) zero signed area: a bow tie or a degenerate one."""
+    # A zero signed area with vertices off one line is a self-intersection (a bow tie).
+    d = p - p[0]
+    far = d[np.argmax(np.abs(d).sum(axis=1))]
+    off_line = np.abs(d[:, 0] * far[1] - d[:, 1] * far[0]).max()
+    if scale > 0.0 and float(off_line) > _AREA_TOL * scale * scale:
+        _check_simple(p, _next(p), scale, name)
+    raise InputError(name, "polygon has zero area (all vertices collinear or coincident)")
+
+
+def _is_convex(p: FloatArray, q: FloatArray, scale: float) -> bool:
+    """Whether the CCW polygon ``p`` (edges ``p → q``) is convex."""
     e = q - p
     e_next = _next(e)
     turn = e[:, 0] * e_next[:, 1] - e[:, 1] * e_next[:, 0]
@@ -101,19 +131,7 @@ def _polygon_region(polygon: ArrayLike, name: str) -> Region:
     if convex:
         angles = np.arctan2(turn, e[:, 0] * e_next[:, 0] + e[:, 1] * e_next[:, 1])
         convex = abs(float(angles.sum()) - 2 * math.pi) < 1e-6
-    if not convex:
-        _check_simple(p, q, scale, name)
-    n = len(p)
-    idx = np.arange(n)
-    return Region(
-        start=p,
-        end=q,
-        nxt=np.concatenate([idx[1:], idx[:1]]),
-        prv=np.concatenate([idx[n - 1 :], idx[: n - 1]]),
-        area=area,
-        convex=convex,
-        name=name,
-    )
+    return convex
 
 
 def _check_simple(p: FloatArray, q: FloatArray, scale: float, name: str) -> None:
