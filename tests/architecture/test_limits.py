@@ -39,7 +39,6 @@ KNOWN: dict[tuple[str, str, str], int] = {
     ("parameters", "perception/stereo/matching.py", "_select"): 9,
     ("parameters", "perception/recognition/ivf.py", "_build"): 10,
     # landed by other issues during this session (after the limits test): to split
-    ("complexity", "cli/watch.py", "_source"): 16,
     ("complexity", "inputs.py", "SceneInputs.check"): 19,
     ("complexity", "inputs.py", "scene_folder_inputs"): 18,
     ("complexity", "live/sources.py", "rosbag_frames"): 18,
@@ -56,7 +55,6 @@ KNOWN: dict[tuple[str, str, str], int] = {
     ("lines", "tools/fuzz/files.py", ""): 968,
     ("parameters", "cli/annotate.py", "annotate_cmd"): 10,
     ("parameters", "cli/points.py", "points_cmd"): 13,
-    ("parameters", "cli/watch.py", "_source"): 9,
     # a typer command: one parameter per CLI option (issue 14: the RGB-D sources added 8)
     ("parameters", "cli/watch.py", "watch_cmd"): 26,
     ("parameters", "perception/rgbd.py", "measure_object"): 11,

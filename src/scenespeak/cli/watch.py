@@ -6,6 +6,7 @@ import json
 import sys
 import tempfile
 from collections.abc import Iterator
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -15,50 +16,55 @@ from scenespeak.cli._app import CalibRightOpt, QuietOpt, app
 from scenespeak.errors import InputError, ScenespeakError
 
 
-def _source(
-    frames: Path | None,
-    left_video: Path | None,
-    right_video: Path | None,
-    sbs: Path | None,
-    cameras: tuple[int, int] | None,
-    rosbag: Path | None,
-    topics: tuple[str | None, str | None],
-    fps: float,
-    max_frames: int | None,
-) -> Iterator[Any]:
+@dataclass(frozen=True)
+class _StreamSource:
+    """The stereo source options of ``watch`` (exactly one of them is to be given)."""
+
+    frames: Path | None
+    left_video: Path | None
+    right_video: Path | None
+    sbs: Path | None
+    cameras: tuple[int, int] | None
+    rosbag: Path | None
+    topics: tuple[str | None, str | None]
+
+    def given(self) -> list[str]:
+        """The options given, by their flags."""
+        flags = (
+            ("--frames", self.frames),
+            ("--left-video/--right-video", self.left_video or self.right_video),
+            ("--sbs", self.sbs),
+            ("--cameras", self.cameras),
+            ("--rosbag", self.rosbag),
+        )
+        return [n for n, v in flags if v is not None]
+
+
+def _source(src: _StreamSource, fps: float, max_frames: int | None) -> Iterator[Any]:
     from scenespeak.live import sources
 
-    given = [
-        n
-        for n, v in (
-            ("--frames", frames),
-            ("--left-video/--right-video", left_video or right_video),
-            ("--sbs", sbs),
-            ("--cameras", cameras),
-            ("--rosbag", rosbag),
-        )
-        if v is not None
-    ]
+    given = src.given()
     if len(given) != 1:
         raise InputError(
             "watch",
             "give exactly one source: --frames DIR, --left-video L --right-video R, --sbs F, "
             f"--cameras I J or --rosbag BAG (given: {', '.join(given) or 'none'})",
         )
-    if frames is not None:
-        return sources.folder_frames(frames, fps=fps)
-    if left_video is not None or right_video is not None:
-        if left_video is None or right_video is None:
+    if src.frames is not None:
+        return sources.folder_frames(src.frames, fps=fps)
+    if src.left_video is not None or src.right_video is not None:
+        if src.left_video is None or src.right_video is None:
             raise InputError("watch", "--left-video and --right-video go together")
-        return sources.video_frames(left_video, right_video, max_frames=max_frames)
-    if sbs is not None:
-        return sources.sbs_frames(sbs, max_frames=max_frames)
-    if cameras is not None:
-        return sources.camera_frames(cameras[0], cameras[1], max_frames=max_frames)
-    assert rosbag is not None
-    if topics[0] is None or topics[1] is None:
-        raise InputError(rosbag, "give --left-topic and --right-topic (sensor_msgs/Image)")
-    return sources.rosbag_frames(rosbag, topics[0], topics[1])
+        return sources.video_frames(src.left_video, src.right_video, max_frames=max_frames)
+    if src.sbs is not None:
+        return sources.sbs_frames(src.sbs, max_frames=max_frames)
+    if src.cameras is not None:
+        return sources.camera_frames(src.cameras[0], src.cameras[1], max_frames=max_frames)
+    assert src.rosbag is not None
+    left, right = src.topics
+    if left is None or right is None:
+        raise InputError(src.rosbag, "give --left-topic and --right-topic (sensor_msgs/Image)")
+    return sources.rosbag_frames(src.rosbag, left, right)
 
 
 def _rig(
@@ -173,10 +179,10 @@ def watch_cmd(
     del quiet  # no progress: the stream itself is the output
     with tempfile.TemporaryDirectory(prefix="scenespeak-watch-") as tmp:
         rig = _rig(calib, calib_right, rosbag, (left_info, right_info), tmp)
-        items = _source(
-            frames, left_video, right_video, sbs, cameras, rosbag,
-            (left_topic, right_topic), fps, max_frames,
-        )  # fmt: skip
+        src = _StreamSource(
+            frames, left_video, right_video, sbs, cameras, rosbag, (left_topic, right_topic)
+        )
+        items = _source(src, fps, max_frames)
         options = StreamOptions(
             tracking=TrackingOptions(keyframe_every=keyframe_every),
             pipeline=PipelineOptions(unknown=unknown, summary=False),
