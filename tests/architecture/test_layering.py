@@ -19,7 +19,15 @@ SRC = Path(__file__).resolve().parents[2] / "src" / "scenespeak"
 #: Leaf modules every room may use: errors, safe reading and text cleaning, size limits.
 BASE = {"errors", "cleantext", "safeio", "safetext", "limits"}
 #: The composition layer: the pipelines and the input readers that feed them.
-COMPOSE = {"pipeline", "description", "pipeline_rgbd", "inputs", "scene_folder"}
+COMPOSE = {
+    "pipeline",
+    "description",
+    "pipeline_rgbd",
+    "rgbd_description",
+    "rgbd_regions",
+    "inputs",
+    "scene_folder",
+}
 _BELOW_COMPOSE = BASE | {"geometry", "contract", "perception", "spatial"}
 #: room → the rooms of scenespeak it may import (itself always).
 ALLOWED: dict[str, set[str]] = {

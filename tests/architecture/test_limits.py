@@ -51,15 +51,12 @@ KNOWN: dict[tuple[str, str, str], int] = {
     ("complexity", "tools/fuzz/runner.py", "classify"): 20,
     ("complexity", "tools/rgbd_eval.py", "evaluate_scene"): 19,
     ("complexity", "tools/rgbd_eval.py", "summarise"): 16,
-    ("lines", "pipeline_rgbd.py", ""): 703,
     ("lines", "tools/fuzz/files.py", ""): 968,
     ("parameters", "cli/annotate.py", "annotate_cmd"): 10,
     ("parameters", "cli/points.py", "points_cmd"): 13,
     # a typer command: one parameter per CLI option (issue 14: the RGB-D sources added 8)
     ("parameters", "cli/watch.py", "watch_cmd"): 26,
     ("parameters", "perception/rgbd.py", "measure_object"): 11,
-    ("parameters", "pipeline_rgbd.py", "describe_rgbd"): 12,
-    ("parameters", "pipeline_rgbd.py", "describe_stereo_masks"): 10,
     ("parameters", "tools/fuzz/runner.py", "_outcome"): 9,
 }
 

@@ -10,12 +10,13 @@ from scenespeak.perception.intrinsics import Intrinsics
 from scenespeak.perception.masks import Box
 from scenespeak.perception.rgbd import (
     MeasuredObject,
+    RGBDOptions,
     box_span,
     estimate_support_plane,
     measure_object,
     surface_modes,
 )
-from scenespeak.pipeline_rgbd import describe_image_plane, describe_rgbd
+from scenespeak.pipeline_rgbd import DescribeOptions, describe_image_plane, describe_rgbd
 
 CAM = Intrinsics(rs.FX, rs.FY, rs.CX, rs.CY, rs.W, rs.H, up=(0.0, -1.0, 0.0))
 
@@ -246,3 +247,32 @@ def test_a_wall_inside_a_mask_does_not_join_the_object() -> None:
     assert isinstance(obj, MeasuredObject)
     assert obj.kept is not None and np.all(obj.kept % 640 < 390)
     assert obj.kept_pixels == np.count_nonzero(mask[:, :390])
+
+
+def test_options_object_and_the_old_keywords_describe_alike() -> None:
+    depth, inst, labels = rs.render()
+    stage = RGBDOptions(min_pixels=30)
+    old = describe_rgbd(
+        None, depth, CAM, masks=inst, labels=labels, options=stage, directions=96, summary=False
+    )
+    new = describe_rgbd(
+        None,
+        depth,
+        CAM,
+        masks=inst,
+        labels=labels,
+        options=DescribeOptions(rgbd=stage, directions=96, summary=False),
+    )
+    assert old.summary == new.summary == ""
+    assert [o.name for o in old.objects] == [o.name for o in new.objects]
+    for a, b in zip(old.relations, new.relations, strict=True):
+        assert a.sentence == b.sentence
+        assert a.f0.shape == b.f0.shape == (96,)
+        assert np.array_equal(a.f0, b.f0)
+    # a keyword sets its field on top of the options object
+    assert (
+        describe_rgbd(
+            None, depth, CAM, masks=inst, labels=labels, options=DescribeOptions(), summary=False
+        ).summary
+        == ""
+    )
