@@ -121,37 +121,37 @@ class SceneInputs:
                 "--labels", "names the instances of --masks (or --boxes' categories); give --masks"
             )
         if form in ("stereo", "stereo-masks"):
-            if self.calib is None:
-                need = "" if self.db or self.masks else " and the object database (--db or --masks)"
-                raise InputError(
-                    "--calib", f"a stereo pair (LEFT RIGHT) needs its calibration{need}"
-                )
-            if self.depth is not None:
-                raise InputError("--depth", "give a stereo pair or a depth image, not both")
-            if self.boxes is not None:
-                raise InputError(
-                    "--boxes", "boxes work with --depth or alone; with a stereo pair give --masks"
-                )
-            if form == "stereo" and self.db is None:
-                raise InputError("--db", "a stereo pair needs the object database (or --masks)")
-            return
-        if form == "rgbd":
-            if self.intrinsics is None:
-                raise InputError(
-                    "--intrinsics", "a depth image needs the colour camera's intrinsics"
-                )
-            if self.masks is None and self.boxes is None and self.db is None:
-                raise InputError(
-                    "--depth", "say what the objects are: give --masks, --boxes or --db"
-                )
-            return
-        if self.masks is None and self.boxes is None:
+            self._check_stereo(form)
+        elif form == "rgbd":
+            self._check_rgbd()
+        elif self.masks is None and self.boxes is None:
             raise InputError(
                 str(self.color),
                 "a single image needs --depth and --intrinsics (with --db, --masks or --boxes), "
                 "or --masks / --boxes for relations in the image plane; or give the right image "
                 "too: a stereo pair needs LEFT RIGHT --calib",
             )
+
+    def _check_stereo(self, form: str) -> None:
+        """A stereo pair: its calibration, no depth, no boxes, the database unless masks."""
+        if self.calib is None:
+            need = "" if self.db or self.masks else " and the object database (--db or --masks)"
+            raise InputError("--calib", f"a stereo pair (LEFT RIGHT) needs its calibration{need}")
+        if self.depth is not None:
+            raise InputError("--depth", "give a stereo pair or a depth image, not both")
+        if self.boxes is not None:
+            raise InputError(
+                "--boxes", "boxes work with --depth or alone; with a stereo pair give --masks"
+            )
+        if form == "stereo" and self.db is None:
+            raise InputError("--db", "a stereo pair needs the object database (or --masks)")
+
+    def _check_rgbd(self) -> None:
+        """Colour + depth: the intrinsics and what the objects are."""
+        if self.intrinsics is None:
+            raise InputError("--intrinsics", "a depth image needs the colour camera's intrinsics")
+        if self.masks is None and self.boxes is None and self.db is None:
+            raise InputError("--depth", "say what the objects are: give --masks, --boxes or --db")
 
 
 def _labels(inputs: SceneInputs) -> dict[int, str] | None:
@@ -329,9 +329,6 @@ def scene_folder_inputs(
     stereo = (
         (d / "left.png").is_file() and (d / "right.png").is_file() and (d / "calib.json").is_file()
     )
-    color = _first(d, ("color.png", "color.jpg", "left.png"))
-    depth = _first(d, ("depth.png", "depth.tif", "depth.tiff", "depth.npy"))
-    rgbd = color is not None and depth is not None and (d / "intrinsics.json").is_file()
     if layout == "stereo" or (layout == "auto" and stereo):
         if not stereo:
             raise InputError(
@@ -340,13 +337,19 @@ def scene_folder_inputs(
         return SceneInputs(
             color=d / "left.png", right=d / "right.png", calib=d / "calib.json", db=db
         )
-    if not rgbd:
+    return _rgbd_folder_inputs(d, db, use_masks)
+
+
+def _rgbd_folder_inputs(d: Path, db: PathIn | None, use_masks: bool) -> SceneInputs:
+    """The RGB-D layout of :func:`scene_folder_inputs` (the folder holds no stereo scene)."""
+    color = _first(d, ("color.png", "color.jpg", "left.png"))
+    depth = _first(d, ("depth.png", "depth.tif", "depth.tiff", "depth.npy"))
+    if color is None or depth is None or not (d / "intrinsics.json").is_file():
         raise InputError(
             d,
             "holds neither a stereo scene (left.png, right.png, calib.json) nor an RGB-D scene "
             "(color.png, depth.png, intrinsics.json)",
         )
-    assert color is not None and depth is not None
     masks = _first(d, ("instances.png", "left_labels.png")) if use_masks else None
     labels = d / "labels.json" if masks is not None and (d / "labels.json").is_file() else None
     if masks is None and db is None:

@@ -39,11 +39,8 @@ KNOWN: dict[tuple[str, str, str], int] = {
     ("parameters", "perception/stereo/matching.py", "_select"): 9,
     ("parameters", "perception/recognition/ivf.py", "_build"): 10,
     # landed by other issues during this session (after the limits test): to split
-    ("complexity", "inputs.py", "SceneInputs.check"): 19,
-    ("complexity", "inputs.py", "scene_folder_inputs"): 18,
     ("complexity", "live/sources.py", "rosbag_frames"): 18,
     ("complexity", "perception/calibfiles.py", "_check_matrices"): 17,
-    ("complexity", "perception/masks.py", "instances_from_array"): 19,
     ("complexity", "safeio.py", "_yaml_walk"): 17,
     ("complexity", "tools/fuzz/apicases.py", "_histogram_cases"): 20,
     ("complexity", "tools/fuzz/options.py", "options"): 19,

@@ -224,6 +224,31 @@ def instances_from_array(
     """
     from scipy import ndimage
 
+    a = _checked_image(image, size, source, other_name)
+    found = ndimage.find_objects(a)
+    ids = tuple(k + 1 for k, sl in enumerate(found) if sl is not None)
+    if not ids:
+        raise ImageError(source, "is empty: no pixel belongs to an instance (all 0)")
+    names = dict(labels or {})
+    _check_labels(names, ids, source, labels_source)
+    boxes = []
+    for k in ids:
+        sl = found[k - 1]
+        assert sl is not None
+        boxes.append((int(sl[1].start), int(sl[0].start), int(sl[1].stop), int(sl[0].stop)))
+    return InstanceMasks(
+        image=a,
+        ids=ids,
+        labels=tuple(names.get(k, UNKNOWN) for k in ids),
+        boxes=tuple(boxes),
+        source=source,
+    )
+
+
+def _checked_image(
+    image: NDArray[np.integer[Any]], size: tuple[int, int] | None, source: str, other_name: str
+) -> NDArray[np.int32]:
+    """The instance image as int32: one channel, of ``size`` (width, height), no negatives."""
     a = np.asarray(image)
     if a.ndim != 2:
         raise ImageError(source, f"must have one channel, got shape {a.shape}")
@@ -237,31 +262,22 @@ def instances_from_array(
         raise ImageError(
             source, "holds negative values; instance numbers are 0 (background) or more"
         )
-    found = ndimage.find_objects(a)
-    ids = tuple(k + 1 for k, sl in enumerate(found) if sl is not None)
-    if not ids:
-        raise ImageError(source, "is empty: no pixel belongs to an instance (all 0)")
-    names = dict(labels or {})
+    return a
+
+
+def _check_labels(
+    names: Mapping[int, str], ids: tuple[int, ...], source: str, labels_source: str
+) -> None:
+    """Labels may only name instances that are in the image (``ids``)."""
     missing = sorted(set(names) - set(ids))
-    if missing:
-        shown = ", ".join(str(k) for k in missing[:8]) + (" ..." if len(missing) > 8 else "")
-        raise InputError(
-            labels_source,
-            f"names instance{'s' if len(missing) > 1 else ''} {shown} that "
-            f"{'are' if len(missing) > 1 else 'is'} not in {source} (it holds "
-            f"{', '.join(str(k) for k in ids[:8])}{' ...' if len(ids) > 8 else ''})",
-        )
-    boxes = []
-    for k in ids:
-        sl = found[k - 1]
-        assert sl is not None
-        boxes.append((int(sl[1].start), int(sl[0].start), int(sl[1].stop), int(sl[0].stop)))
-    return InstanceMasks(
-        image=a,
-        ids=ids,
-        labels=tuple(names.get(k, UNKNOWN) for k in ids),
-        boxes=tuple(boxes),
-        source=source,
+    if not missing:
+        return
+    shown = ", ".join(str(k) for k in missing[:8]) + (" ..." if len(missing) > 8 else "")
+    raise InputError(
+        labels_source,
+        f"names instance{'s' if len(missing) > 1 else ''} {shown} that "
+        f"{'are' if len(missing) > 1 else 'is'} not in {source} (it holds "
+        f"{', '.join(str(k) for k in ids[:8])}{' ...' if len(ids) > 8 else ''})",
     )
 
 
