@@ -279,45 +279,72 @@ def rosbag_frames(
     except Exception as exc:
         raise InputError(bag, f"cannot be opened as a ROS bag ({exc})") from exc
     try:
-        topics = {c.topic for c in reader.connections}
-        for t in (left_topic, right_topic):
-            if t not in topics:
-                raise InputError(bag, f"has no topic {t!r} (topics: {', '.join(sorted(topics))})")
-        conns = [c for c in reader.connections if c.topic in (left_topic, right_topic)]
-        pending: dict[str, list[tuple[int, Any]]] = {left_topic: [], right_topic: []}
-        k = 0
-        t_first: int | None = None
-        for conn, ts, raw in reader.messages(connections=conns):
-            try:
-                msg = reader.deserialize(raw, conn.msgtype)
-                img = _image_from_msg(msg)
-                stamp = _stamp(msg, ts)
-            except Exception as exc:
-                yield BrokenFrame(k, f"{bag} {conn.topic} @ {ts}", f"bad image message ({exc})")
-                k += 1
-                continue
-            pending[conn.topic].append((stamp, img))
-            other = right_topic if conn.topic == left_topic else left_topic
-            match = _take_partner(pending[other], stamp, max_skew_s)
-            if match is None:
-                continue
-            pending[conn.topic].pop()
-            ls, li = (stamp, img) if conn.topic == left_topic else match
-            _, ri = match if conn.topic == left_topic else (stamp, img)
-            t_first = ls if t_first is None else t_first
-            # Drop the partnerless images older than this pair: they will never be paired.
-            for q in pending.values():
-                while q and q[0][0] < ls - int(max_skew_s * 1e9):
-                    q.pop(0)
-                    yield BrokenFrame(k, f"{bag} @ {ls}", "an image without a partner")
-                    k += 1
-            if li.shape != ri.shape:
-                yield BrokenFrame(k, f"{bag} @ {ls}", f"left {li.shape} and right {ri.shape}")
-            else:
-                yield Frame(k, (ls - t_first) / 1e9, li, ri, f"{bag} @ {ls}")
-            k += 1
+        conns = _stereo_connections(reader, bag, left_topic, right_topic)
+        yield from _paired_frames(reader, conns, bag, (left_topic, right_topic), max_skew_s)
     finally:
         reader.close()
+
+
+def _stereo_connections(
+    reader: Any, bag: str | PathLike[str], left_topic: str, right_topic: str
+) -> list[Any]:
+    """The bag's connections of the two image topics (an error naming the topics it has)."""
+    topics = {c.topic for c in reader.connections}
+    for t in (left_topic, right_topic):
+        if t not in topics:
+            raise InputError(bag, f"has no topic {t!r} (topics: {', '.join(sorted(topics))})")
+    return [c for c in reader.connections if c.topic in (left_topic, right_topic)]
+
+
+def _paired_frames(
+    reader: Any,
+    conns: list[Any],
+    bag: str | PathLike[str],
+    topics: tuple[str, str],
+    max_skew_s: float,
+) -> Iterator[Item]:
+    """The messages of ``conns`` paired by stamp into frames (see :func:`rosbag_frames`)."""
+    left_topic, right_topic = topics
+    pending: dict[str, list[tuple[int, Any]]] = {left_topic: [], right_topic: []}
+    k = 0
+    t_first: int | None = None
+    for conn, ts, raw in reader.messages(connections=conns):
+        try:
+            msg = reader.deserialize(raw, conn.msgtype)
+            img = _image_from_msg(msg)
+            stamp = _stamp(msg, ts)
+        except Exception as exc:
+            yield BrokenFrame(k, f"{bag} {conn.topic} @ {ts}", f"bad image message ({exc})")
+            k += 1
+            continue
+        pending[conn.topic].append((stamp, img))
+        other = right_topic if conn.topic == left_topic else left_topic
+        match = _take_partner(pending[other], stamp, max_skew_s)
+        if match is None:
+            continue
+        pending[conn.topic].pop()
+        ls, li = (stamp, img) if conn.topic == left_topic else match
+        _, ri = match if conn.topic == left_topic else (stamp, img)
+        t_first = ls if t_first is None else t_first
+        # Drop the partnerless images older than this pair: they will never be paired.
+        for _ in range(_drop_older(pending, ls - int(max_skew_s * 1e9))):
+            yield BrokenFrame(k, f"{bag} @ {ls}", "an image without a partner")
+            k += 1
+        if li.shape != ri.shape:
+            yield BrokenFrame(k, f"{bag} @ {ls}", f"left {li.shape} and right {ri.shape}")
+        else:
+            yield Frame(k, (ls - t_first) / 1e9, li, ri, f"{bag} @ {ls}")
+        k += 1
+
+
+def _drop_older(pending: dict[str, list[tuple[int, Any]]], oldest: int) -> int:
+    """Drop the queued images stamped before ``oldest``; how many were dropped."""
+    n = 0
+    for q in pending.values():
+        while q and q[0][0] < oldest:
+            q.pop(0)
+            n += 1
+    return n
 
 
 def _take_partner(

@@ -33,10 +33,13 @@ import sys
 import tempfile
 from collections.abc import Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import cv2
 import numpy as np
+
+if TYPE_CHECKING:
+    from scenespeak.tools.truth import SceneTruth
 
 __all__ = ["FORMS", "evaluate_scene", "main", "summarise"]
 
@@ -128,25 +131,41 @@ def evaluate_scene(scene: Path, form: str, db: Path | None, tmp: Path) -> dict[s
     if data is None:
         res["error"] = err
         return res
-    if form == "image":
-        rels = {(r["argument"], r["referent"]): r["primary"] for r in data["relations"]}
-        pairs = _image_truth(scene)
-        res["pairs"] = len(pairs)
-        res["right"] = sum(rels.get((a, b)) == p for a, b, p in pairs)
-        res["wrong"] = [(a, b, p, rels.get((a, b))) for a, b, p in pairs if rels.get((a, b)) != p]
-        return res
-    objs = {o.get("name", o["label"]): o for o in data["objects"]}
     rels = {(r["argument"], r["referent"]): r["primary"] for r in data["relations"]}
+    if form == "image":
+        res.update(_image_scores(scene, rels))
+    else:
+        res.update(_object_scores(t, truth, data, rels))
+    return res
+
+
+def _image_scores(scene: Path, rels: dict[tuple[str, str], str]) -> dict[str, Any]:
+    """Pairs of the picture's truth, right and wrong (image-plane form)."""
+    pairs = _image_truth(scene)
+    return {
+        "pairs": len(pairs),
+        "right": sum(rels.get((a, b)) == p for a, b, p in pairs),
+        "wrong": [(a, b, p, rels.get((a, b))) for a, b, p in pairs if rels.get((a, b)) != p],
+    }
+
+
+def _object_scores(
+    t: SceneTruth, truth: dict[str, Any], data: dict[str, Any], rels: dict[tuple[str, str], str]
+) -> dict[str, Any]:
+    """Objects described, clear pairs right and wrong, centroid errors (3-D forms)."""
+    objs = {o.get("name", o["label"]): o for o in data["objects"]}
     clear = [r for r in t.relations if not r.ambiguous]
-    res["objects"] = len(t.objects)
-    res["described"] = sum(o.label in objs for o in t.objects)
-    res["pairs"] = len(clear)
-    res["right"] = sum(rels.get((r.argument, r.referent)) == r.primary for r in clear)
-    res["wrong"] = [
-        (r.argument, r.referent, r.primary, rels.get((r.argument, r.referent)))
-        for r in clear
-        if rels.get((r.argument, r.referent)) != r.primary
-    ]
+    res: dict[str, Any] = {
+        "objects": len(t.objects),
+        "described": sum(o.label in objs for o in t.objects),
+        "pairs": len(clear),
+        "right": sum(rels.get((r.argument, r.referent)) == r.primary for r in clear),
+        "wrong": [
+            (r.argument, r.referent, r.primary, rels.get((r.argument, r.referent)))
+            for r in clear
+            if rels.get((r.argument, r.referent)) != r.primary
+        ],
+    }
     errors = []
     for o in truth["objects"]:
         if o["label"] in objs and "visible_centroid" in o and objs[o["label"]]["centroid"]:
@@ -173,27 +192,27 @@ def summarise(results: Sequence[dict[str, Any]]) -> dict[str, dict[str, Any]]:
             "accuracy": right / pairs if pairs else None,
         }
         if form != "image":
-            objects = sum(r.get("objects", 0) for r in rs)
-            described = sum(r.get("described", 0) for r in rs)
-            errs = np.array([e for r in rs for e in r.get("centroid_errors", [])])
-            row.update(
-                {
-                    "objects": objects,
-                    "described": described,
-                    "scenes_all_described": sum(
-                        r.get("described", -1) == r.get("objects", 0) for r in rs
-                    ),
-                }
-            )
-            if len(errs):
-                row["centroid_error_m"] = {
-                    "median": float(np.median(errs)),
-                    "p95": float(np.quantile(errs, 0.95)),
-                    "max": float(errs.max()),
-                    "share_le_1cm": float(np.mean(errs <= 0.01)),
-                }
+            row.update(_object_totals(rs))
         out[form] = row
     return out
+
+
+def _object_totals(rs: Sequence[dict[str, Any]]) -> dict[str, Any]:
+    """Objects described and the centroid error quantiles of one 3-D form's scenes."""
+    errs = np.array([e for r in rs for e in r.get("centroid_errors", [])])
+    row: dict[str, Any] = {
+        "objects": sum(r.get("objects", 0) for r in rs),
+        "described": sum(r.get("described", 0) for r in rs),
+        "scenes_all_described": sum(r.get("described", -1) == r.get("objects", 0) for r in rs),
+    }
+    if len(errs):
+        row["centroid_error_m"] = {
+            "median": float(np.median(errs)),
+            "p95": float(np.quantile(errs, 0.95)),
+            "max": float(errs.max()),
+            "share_le_1cm": float(np.mean(errs <= 0.01)),
+        }
+    return row
 
 
 def main(argv: Sequence[str] | None = None) -> int:
