@@ -32,11 +32,6 @@ KNOWN: dict[tuple[str, str, str], int] = {
     # not split yet (see the note of issue 9)
     ("lines", "perception/calibration.py", ""): 900,
     ("lines", "perception/recognition/store.py", ""): 610,
-    ("parameters", "perception/stereo/__init__.py", "stereo_points"): 16,
-    ("parameters", "perception/stereo/matching.py", "match_stereo"): 14,
-    ("parameters", "perception/stereo/dense.py", "dense_disparity"): 10,
-    ("parameters", "perception/stereo/matching.py", "_global_block"): 9,
-    ("parameters", "perception/stereo/matching.py", "_select"): 9,
     ("parameters", "perception/recognition/ivf.py", "_build"): 10,
     # landed by other issues during this session (after the limits test): to split
     ("complexity", "perception/calibfiles.py", "_check_matrices"): 17,

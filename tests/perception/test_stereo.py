@@ -459,3 +459,51 @@ def test_dense_crop_covers_the_matches_plus_margin_and_the_given_region() -> Non
     assert (wx0, wy0) == (px0 - 12, py0 - 12)
     assert (wx1, wy1) == (min(W, px1 + 12), min(H, py1 + 12))
     assert ax0 <= 5 and ay0 <= 3
+
+
+def test_options_objects_are_the_old_keywords() -> None:
+    # each function takes its options object or the old single keywords (they replace the
+    # object's fields); an unknown keyword is refused naming the fields
+    from scenespeak.perception.stereo import DenseOptions, MatchOptions, PointsOptions
+
+    rig = rig_from_short(0.12, 60.0, (640, 480))
+    fl, fr = _synthetic_features(rig, _points(50, 2))
+    xy = fr.xy.copy()
+    xy[::2, 1] += 5.0  # every other right keypoint 5 rows down: inside a 6 px band only
+    moved = Features(xy, fr.size, fr.angle, fr.response, fr.octave, fr.descriptors)
+    rect = rectify(rig)
+    by_kw = match_stereo(fl, moved, rect, band_px=6.0)
+    by_opt = match_stereo(fl, moved, rect, options=MatchOptions(band_px=6.0))
+    assert len(by_kw) == len(by_opt) == 50
+    assert np.array_equal(by_kw.right_index, by_opt.right_index)
+    # a keyword overrides the object's field
+    assert len(match_stereo(fl, moved, rect, options=MatchOptions(band_px=6.0), band_px=1.5)) == 25
+    with pytest.raises(TypeError, match=r"band_pixels.*the fields are"):
+        match_stereo(fl, moved, rect, band_pixels=6.0)
+
+    left, right, rig, _ = _plane_pair()
+    kw = dense_disparity(left, right, rect, min_disparity=0, num_disparities=64, block_size=5)
+    opt = DenseOptions(min_disparity=0, num_disparities=64, block_size=5)
+    assert np.array_equal(
+        kw.disparity, dense_disparity(left, right, rect, options=opt).disparity, equal_nan=True
+    )
+    with pytest.raises(TypeError, match="DenseOptions"):
+        dense_disparity(left, right, rect, blocksize=5)
+
+    a = stereo_points(left, right, rig, verify=False, ratio=0.7)
+    b = stereo_points(left, right, rig, options=PointsOptions(verify=False, ratio=0.7))
+    assert len(a.points) > 0 and np.array_equal(a.points.xyz, b.points.xyz)
+    with pytest.raises(TypeError, match="PointsOptions"):
+        stereo_points(left, right, rig, dense_crops=True)
+
+
+def test_plain_dense_margin_is_not_the_pipelines() -> None:
+    # a plain stereo_points call keeps its 5 px margin (plain callers with dense_crop=True and
+    # no margin exist); the pipeline's stage sets its own 16 px
+    from scenespeak.perception.stage_options import DENSE_MARGIN, StereoOptions
+    from scenespeak.perception.stereo import PLAIN_DENSE_MARGIN, PointsOptions
+
+    assert PointsOptions().dense_margin == PLAIN_DENSE_MARGIN == 5
+    assert not PointsOptions().dense_crop
+    staged = PointsOptions.with_overrides(None, StereoOptions().keywords())
+    assert staged.dense_crop and staged.dense_margin == DENSE_MARGIN == 16

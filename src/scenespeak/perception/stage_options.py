@@ -1,10 +1,12 @@
 """The stereo stage's options as the pipeline runs it (the one owner of their defaults).
 
-:func:`scenespeak.perception.stereo.stereo_points` keeps its own keyword defaults for a plain
-call on a pair (``dense_crop=False``: the dense map over the whole image, so ``dense_margin``
-is not used); every caller that runs the *pipeline's* stereo stage (``describe``, ``points``,
-the tracker's keyframes) takes :class:`StereoOptions` from here, so the cropped map and its
-margin have one default, :data:`DENSE_MARGIN`.
+:func:`scenespeak.perception.stereo.stereo_points` keeps its own defaults for a plain call on a
+pair (:class:`scenespeak.perception.stereo.PointsOptions`: ``dense_crop=False``, the dense map
+over the whole image, so ``dense_margin`` is not used; with ``dense_crop=True`` and no margin,
+:data:`~scenespeak.perception.stereo.PLAIN_DENSE_MARGIN` = 5 px, kept because plain callers of
+that form exist and their maps would change); every caller that runs the *pipeline's* stereo
+stage (``describe``, ``points``, the tracker's keyframes) takes :class:`StereoOptions` from
+here, so the cropped map and its margin have one default, :data:`DENSE_MARGIN`.
 """
 
 from __future__ import annotations

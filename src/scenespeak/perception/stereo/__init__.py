@@ -42,13 +42,13 @@ The stage is a small package by concern; every name is importable from here:
 * :mod:`~scenespeak.perception.stereo.matching`: sparse matching (:func:`match_stereo`);
 * :mod:`~scenespeak.perception.stereo.dense`: dense SGBM disparity (:func:`dense_disparity`);
 * :mod:`~scenespeak.perception.stereo.points`: triangulation and a region's dense points;
+* :mod:`~scenespeak.perception.stereo.options`: the options objects (:class:`MatchOptions`,
+  :class:`DenseOptions`, :class:`PointsOptions`); the old single keywords still work;
 * :mod:`~scenespeak.perception.stereo.output`: the JSON object and PLY files;
 * this module: :func:`stereo_points`, all of it in one call.
 """
 
 from __future__ import annotations
-
-from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -72,6 +72,12 @@ from scenespeak.perception.stereo.matching import (
     _verify_dense,
     match_stereo,
 )
+from scenespeak.perception.stereo.options import (
+    PLAIN_DENSE_MARGIN,
+    DenseOptions,
+    MatchOptions,
+    PointsOptions,
+)
 from scenespeak.perception.stereo.output import points_to_json, write_ply
 from scenespeak.perception.stereo.points import region_points, triangulate
 from scenespeak.perception.stereo.results import (
@@ -82,13 +88,17 @@ from scenespeak.perception.stereo.results import (
 )
 
 __all__ = [
+    "PLAIN_DENSE_MARGIN",
     "SGBM_DISP12_MAX_DIFF",
     "SGBM_P1_PER_PIXEL",
     "SGBM_P2_PER_PIXEL",
     "SGBM_SPECKLE_RANGE",
     "SGBM_SPECKLE_WINDOW",
     "DenseDisparity",
+    "DenseOptions",
+    "MatchOptions",
     "Points3D",
+    "PointsOptions",
     "StereoMatches",
     "StereoResult",
     "check_pair",
@@ -137,24 +147,41 @@ def _pixel_box(
     return (max(0, int(lo[0])), max(0, int(lo[1])), min(w, int(hi[0])), min(h, int(hi[1])))
 
 
+def _match_pair(
+    fl: Features,
+    fr: Features,
+    gray: tuple[NDArray[np.generic], NDArray[np.generic]],
+    rect: Rectification,
+    o: PointsOptions,
+) -> tuple[StereoMatches, DenseDisparity | None]:
+    """The matches of :func:`stereo_points` and, with ``o.verify``, the dense map they passed."""
+    if not (len(fl) and len(fr)):
+        return _no_matches(), None
+    cand = _candidates(fl, fr, rect, o.band_px, 0.0, None, need_global=not o.verify)
+    mo = MatchOptions(band_px=o.band_px, min_disparity=0.0, max_disparity=None, mutual=True)
+    if not o.verify:
+        return _select(cand, fl, rect, "global", o.ratio, mo), None
+    # the disparity range for SGBM comes from the strict in-band matches
+    strict = _select(cand, fl, rect, "band", o.ratio, mo)
+    m = _select(cand, fl, rect, "band", o.band_ratio, mo)
+    roi = _dense_box(m, rect, o.dense_roi, o.dense_margin) if o.dense_crop else None
+    dense = dense_disparity(
+        gray[0], gray[1], rect, keypoint_disparities=strict.disparity, roi=roi, pad=16
+    )
+    m = m.subset(_verify_dense(m, dense, mo.dense_tol_px, mo.edge_px, mo.edge_window))
+    return m, dense
+
+
 def stereo_points(
     left_image: NDArray[np.generic],
     right_image: NDArray[np.generic],
     rig: StereoRig,
     *,
-    ratio: float = 0.6,
-    band_px: float = 1.5,
-    band_ratio: float = 0.8,
-    verify: bool = True,
     rect: Rectification | None = None,
     features_left: Features | None = None,
     features_right: Features | None = None,
-    left_name: str = "left image",
-    right_name: str = "right image",
-    min_points: int = 0,
-    dense_crop: bool = False,
-    dense_roi: tuple[float, float, float, float] | None = None,
-    dense_margin: int = 5,
+    options: PointsOptions | None = None,
+    **overrides: object,
 ) -> StereoResult:
     """Match and triangulate a stereo pair in one call (SIFT runs once per image).
 
@@ -168,68 +195,37 @@ def stereo_points(
     left_image, right_image : ndarray
         The input images as given (gray or colour).
     rig : StereoRig
-    ratio, band_px, band_ratio : float
-        See :func:`match_stereo`.
-    verify : bool
-        Use the dense check (more and more accurate matches; also gives ``dense`` for
-        :func:`region_points`). Without it, the paper's matching with a cross check.
     rect : Rectification, optional
         Reuse a rectification (``rectify(rig)`` otherwise).
     features_left, features_right : Features, optional
         Reuse already detected features of these images.
-    left_name, right_name : str
-        Names (file names) used in error messages.
-    min_points : int
-        Raise :class:`~scenespeak.errors.ImageError` when fewer points are found (0: return
-        an empty result instead; a textureless pair gives no points).
-    dense_crop : bool
-        Compute the dense map (``verify``) only over the bounding box of the keypoints it has
-        to check (plus ``dense_roi``) instead of the whole image: the same checks for a
-        fraction of the cost when the scene does not fill the image (about 2.5× faster on the
-        rendered table scenes); elsewhere the map is NaN.
-    dense_roi : (x0, y0, x1, y1), optional
-        With ``dense_crop``, a region of the INPUT left image (pixels) the dense map must also
-        cover, e.g. the recognised objects' outlines for :func:`region_points`.
-    dense_margin : int
-        With ``dense_crop``, pixels added around the keypoints' bounding box (and the region).
+    options : PointsOptions, optional
+        Ratios, band, dense check, cropped dense map, minimum points, the names in error
+        messages (a plain call's defaults otherwise; the pipeline's stereo stage passes
+        ``stage_options.StereoOptions().keywords()``: the cropped map, 16 px margin).
+    **overrides
+        Single fields of :class:`PointsOptions` (``ratio=0.7``, ``dense_crop=True``,
+        ``dense_roi=(x0, y0, x1, y1)``, ``left_name="l.png"``, ...), as the keywords this
+        function took before it had options.
 
     Returns
     -------
     StereoResult
     """
+    o = PointsOptions.with_overrides(options, overrides)
+    left_name, right_name = o.left_name, o.right_name
     check_pair(left_image, right_image, rig, left_name=left_name, right_name=right_name)
     rect = rectify(rig) if rect is None else rect
     gl = to_gray(left_image)
     gr = to_gray(right_image)
     fl = detect(gl, precise_upscale=False) if features_left is None else features_left
     fr = detect(gr, precise_upscale=False) if features_right is None else features_right
-    dense = None
-    if len(fl) and len(fr):
-        cand = _candidates(fl, fr, rect, band_px, 0.0, None, need_global=not verify)
-        kw: dict[str, Any] = {
-            "band_px": band_px,
-            "min_disparity": 0.0,
-            "max_disparity": None,
-            "mutual": True,
-        }
-        if verify:
-            # the disparity range for SGBM comes from the strict in-band matches
-            strict = _select(cand, fl, rect, search="band", ratio=ratio, **kw)
-            m = _select(cand, fl, rect, search="band", ratio=band_ratio, **kw)
-            roi = _dense_box(m, rect, dense_roi, dense_margin) if dense_crop else None
-            dense = dense_disparity(
-                gl, gr, rect, keypoint_disparities=strict.disparity, roi=roi, pad=16
-            )
-            m = m.subset(_verify_dense(m, dense, 0.75, 1.0, 5))
-        else:
-            m = _select(cand, fl, rect, search="global", ratio=ratio, **kw)
-    else:
-        m = _no_matches()
-    if len(m) < min_points:
+    m, dense = _match_pair(fl, fr, (gl, gr), rect, o)
+    if len(m) < o.min_points:
         raise ImageError(
             f"{left_name}, {right_name}",
-            f"only {len(m)} stereo matches (need {min_points}): the images may be textureless, "
-            "out of focus, or not a stereo pair of the same scene",
+            f"only {len(m)} stereo matches (need {o.min_points}): the images may be "
+            "textureless, out of focus, or not a stereo pair of the same scene",
         )
     xyz = triangulate(m.left_rect, m.right_rect, rect)
     good = np.all(np.isfinite(xyz), axis=1)

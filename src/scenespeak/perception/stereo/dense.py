@@ -11,6 +11,7 @@ from numpy.typing import ArrayLike, NDArray
 from scenespeak.errors import ImageError
 from scenespeak.perception.calibration import Rectification
 from scenespeak.perception.features import to_gray
+from scenespeak.perception.stereo.options import DenseOptions
 from scenespeak.perception.stereo.results import DenseDisparity
 
 __all__ = [
@@ -69,13 +70,10 @@ def dense_disparity(
     right: NDArray[np.generic],
     rect: Rectification,
     *,
-    min_disparity: int | None = None,
-    num_disparities: int | None = None,
     keypoint_disparities: ArrayLike | None = None,
-    block_size: int = 3,
     roi: tuple[int, int, int, int] | None = None,
-    uniqueness: int = 10,
-    pad: int | None = None,
+    options: DenseOptions | None = None,
+    **overrides: object,
 ) -> DenseDisparity:
     """Dense disparity of the rectified pair with OpenCV StereoSGBM (3-way mode).
 
@@ -84,28 +82,25 @@ def dense_disparity(
     left, right : ndarray
         The input images as given (gray or colour); they are rectified here if needed.
     rect : Rectification
-    min_disparity, num_disparities : int, optional
-        Search range; by default derived from ``keypoint_disparities`` (the range of the values
-        shared by at least 3 of them within 2 px, ± 8 px, at most half the image width) or,
-        without them, from 0.3 m to infinity.
     keypoint_disparities : array, optional
         Rectified disparities of sparse matches, to narrow the search (faster, fewer errors).
-    block_size : int
-        SGBM block size (odd).
     roi : (x0, y0, x1, y1), optional
         Only compute for this part of the rectified left image (others are NaN); much faster
         for one small object.
-    uniqueness : int
-        SGBM's uniquenessRatio (percent margin of the best cost over the second best).
-    pad : int, optional
-        With ``roi``: pixels of context computed around it (and then dropped), so that SGBM's
-        path costs have settled at the region's border (default ``block_size // 2 + 2``).
+    options : DenseOptions, optional
+        Search range, block size, uniqueness, the context ``pad`` around ``roi`` (the defaults
+        otherwise).
+    **overrides
+        Single fields of :class:`DenseOptions` (``block_size=5``, ``pad=16``, ...), as the
+        keywords this function took before it had options.
 
     Returns
     -------
     DenseDisparity
         Left-right checked (``disp12MaxDiff = 1``), speckles removed; NaN where unknown.
     """
+    o = DenseOptions.with_overrides(options, overrides)
+    block_size = o.block_size
     gl = to_gray(left)
     gr = to_gray(right)
     if gl.shape != gr.shape:
@@ -114,8 +109,8 @@ def dense_disparity(
     h, w = gl.shape
     kd = None if keypoint_disparities is None else np.asarray(keypoint_disparities, float)
     mn_auto, num_auto = _disparity_range(rect, kd)
-    mn = mn_auto if min_disparity is None else int(min_disparity)
-    num = num_auto if num_disparities is None else int(num_disparities)
+    mn = mn_auto if o.min_disparity is None else int(o.min_disparity)
+    num = num_auto if o.num_disparities is None else int(o.num_disparities)
     num = int(16 * max(1, math.ceil(num / 16)))
     x0, y0, x1, y1 = (0, 0, w, h) if roi is None else roi
     x0, x1 = max(0, int(x0)), min(w, math.ceil(x1))
@@ -124,7 +119,7 @@ def dense_disparity(
     box = None if roi is None else (x0, y0, x1, y1)
     if x1 <= x0 or y1 <= y0:
         return DenseDisparity(out, rect, mn, num, box)
-    pad = block_size // 2 + 2 if pad is None else max(0, int(pad))
+    pad = block_size // 2 + 2 if o.pad is None else max(0, int(o.pad))
     # A crop: rows y0..y1; columns from far enough left that every disparity can be searched.
     # OpenCV computes nothing in the first minDisparity + numDisparities columns of its input;
     # where the crop would have to start left of the image, black columns stand in, so that
@@ -148,7 +143,7 @@ def dense_disparity(
         P1=SGBM_P1_PER_PIXEL * bs * bs,
         P2=SGBM_P2_PER_PIXEL * bs * bs,
         disp12MaxDiff=SGBM_DISP12_MAX_DIFF,
-        uniquenessRatio=uniqueness,
+        uniquenessRatio=o.uniqueness,
         speckleWindowSize=SGBM_SPECKLE_WINDOW,
         speckleRange=SGBM_SPECKLE_RANGE,
         mode=cv2.STEREO_SGBM_MODE_SGBM_3WAY,

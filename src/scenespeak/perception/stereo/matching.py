@@ -10,6 +10,7 @@ from numpy.typing import NDArray
 
 from scenespeak.perception.calibration import Rectification
 from scenespeak.perception.features import Features
+from scenespeak.perception.stereo.options import MatchOptions
 from scenespeak.perception.stereo.results import DenseDisparity, StereoMatches
 
 __all__ = ["match_stereo"]
@@ -72,31 +73,30 @@ def _group_best(
 
 
 def _global_block(
-    sq: NDArray[np.float32],
-    s: int,
-    k: int,
-    rxy: NDArray[np.float64],
-    g_best: NDArray[np.intp],
-    g_d1: NDArray[np.float32],
-    g_d2: NDArray[np.float32],
-    col_g: NDArray[np.float32],
-    g_back: NDArray[np.intp],
-) -> None:
-    """Global nearest neighbours of one block of squared distances (fills the arrays)."""
+    sq: NDArray[np.float32], k: int, rxy: NDArray[np.float64]
+) -> tuple[
+    NDArray[np.intp],
+    NDArray[np.float32],
+    NDArray[np.float32],
+    NDArray[np.intp],
+    NDArray[np.float32],
+]:
+    """Global nearest neighbours of one block of squared distances.
+
+    Returns, for each left row, the best right index, its distance and the second best at
+    another place (inf if none); for each right column, the block's nearest left row and its
+    distance (the caller keeps the best over all blocks).
+    """
     n, nr = sq.shape
     rows = np.arange(n)
     order = _smallest(sq, k)
-    g_best[s : s + n] = order[:, 0]
     near = np.sqrt(np.take_along_axis(sq, order, 1))
-    g_d1[s : s + n] = near[:, 0]
     far = np.linalg.norm(rxy[order] - rxy[order[:, :1]], axis=2) > _SAME_PLACE_PX
     far[:, 0] = False
-    g_d2[s : s + n] = np.where(far.any(1), near[rows, np.argmax(far, 1)], np.inf)
+    d2 = np.where(far.any(1), near[rows, np.argmax(far, 1)], np.inf)
     cmin = sq.argmin(0)
     cval = np.sqrt(sq[cmin, np.arange(nr)])
-    better = cval < col_g
-    col_g[better] = cval[better]
-    g_back[better] = cmin[better] + s
+    return order[:, 0], near[:, 0], d2, cmin, cval
 
 
 def _band_pairs(
@@ -180,7 +180,13 @@ def _candidates(
             q = dl[s : s + _CHUNK]
             sq = (q * q).sum(1)[:, None] + rn[None, :] - 2.0 * (q @ dr.T)
             np.maximum(sq, 0.0, out=sq)
-            _global_block(sq, s, k, fr.xy, g_best, g_d1, g_d2, col_g, g_back)
+            best, d1, d2, cmin, cval = _global_block(sq, k, fr.xy)
+            g_best[s : s + len(q)] = best
+            g_d1[s : s + len(q)] = d1
+            g_d2[s : s + len(q)] = d2
+            better = cval < col_g
+            col_g[better] = cval[better]
+            g_back[better] = cmin[better] + s
     doffs = rect.doffs
     bi, bj, bd = _band_pairs(
         dl,
@@ -200,14 +206,12 @@ def _select(
     c: _Candidates,
     fl: Features,
     rect: Rectification,
-    *,
     search: Literal["global", "band"],
     ratio: float,
-    band_px: float,
-    min_disparity: float,
-    max_disparity: float | None,
-    mutual: bool,
+    o: MatchOptions,
 ) -> StereoMatches:
+    """The matches that pass the ratio test (``ratio``), the band and the cross check of ``o``."""
+    band_px, min_disparity, max_disparity = o.band_px, o.min_disparity, o.max_disparity
     nl = len(c.g_best)
     li = np.arange(nl)
     if search == "global":
@@ -223,7 +227,7 @@ def _select(
         ri = np.where(c.b_best >= 0, c.b_best, 0)
         d1, d2, back = c.b_d1, c.b_d2, c.b_back
         ok = (c.b_best >= 0) & (d1 < ratio * d2)
-    if mutual and nl:
+    if o.mutual and nl:
         bl = back[ri]
         ok &= (bl >= 0) & (
             np.linalg.norm(fl.xy[np.maximum(bl, 0)] - fl.xy, axis=1) <= _SAME_PLACE_PX
@@ -270,17 +274,9 @@ def match_stereo(
     features_right: Features,
     rect: Rectification,
     *,
-    ratio: float = 0.6,
-    band_px: float = 1.5,
-    min_disparity: float = 0.0,
-    max_disparity: float | None = None,
-    mutual: bool = True,
-    search: Literal["auto", "global", "band"] = "auto",
-    band_ratio: float = 0.8,
     dense: DenseDisparity | None = None,
-    dense_tol_px: float = 0.75,
-    edge_px: float = 1.0,
-    edge_window: int = 5,
+    options: MatchOptions | None = None,
+    **overrides: object,
 ) -> StereoMatches:
     """Match left to right keypoints of a stereo pair.
 
@@ -290,62 +286,43 @@ def match_stereo(
         SIFT features of the input images (as given, not rectified).
     rect : Rectification
         From :func:`~scenespeak.perception.calibration.rectify`.
-    ratio : float
-        Lowe's ratio test: best distance < ``ratio`` × second best (0.6 as in the paper).
-        Keypoints at the same place as the best (OpenCV's duplicates with another orientation)
-        are not taken as the second best.
-    band_px : float
-        Epipolar band: largest row difference in rectified pixels.
-    min_disparity, max_disparity : float
-        Accepted range of the depth-giving disparity ``x_l − x_r + doffs`` (> min, <= max).
-    mutual : bool
-        Cross check: the right keypoint's best left keypoint must be the same one.
-    search : {"auto", "global", "band"}
-        ``"global"``: the paper's test, best and second best over all right keypoints, then the
-        band. ``"band"``: best and second best inside the band. ``"auto"``: band when ``dense``
-        is given (the dense check removes what the weaker test lets through), else global.
-    band_ratio : float
-        The ratio used by the band search (its second best is nearer than a global one, so
-        the same value would be stricter).
     dense : DenseDisparity, optional
         Verify matches against a dense map: keep a match when the dense disparity at the left
         keypoint agrees within ``dense_tol_px`` and the dense map varies by at most ``edge_px``
         in the ``edge_window`` × ``edge_window`` pixels around it (no depth edge, no hole).
+    options : MatchOptions, optional
+        Ratio test, band, disparity range, cross check, search, dense check (the defaults
+        otherwise).
+    **overrides
+        Single fields of :class:`MatchOptions` (``ratio=0.7``, ``band_px=2.0``, ...), as the
+        keywords this function took before it had options.
 
     Returns
     -------
     StereoMatches
         Possibly empty (e.g. textureless images).
     """
-    if not 0.0 < ratio <= 1.0:
-        raise ValueError(f"ratio must be in (0, 1], got {ratio}")
+    o = MatchOptions.with_overrides(options, overrides)
+    if not 0.0 < o.ratio <= 1.0:
+        raise ValueError(f"ratio must be in (0, 1], got {o.ratio}")
     if len(features_left) == 0 or len(features_right) == 0:
         return _no_matches()
     mode: Literal["global", "band"] = (
-        ("band" if dense is not None else "global") if search == "auto" else search
+        ("band" if dense is not None else "global") if o.search == "auto" else o.search
     )
     cand = _candidates(
         features_left,
         features_right,
         rect,
-        band_px,
-        min_disparity,
-        max_disparity,
+        o.band_px,
+        o.min_disparity,
+        o.max_disparity,
         need_global=mode == "global",
     )
-    m = _select(
-        cand,
-        features_left,
-        rect,
-        search=mode,
-        ratio=ratio if mode == "global" else band_ratio,
-        band_px=band_px,
-        min_disparity=min_disparity,
-        max_disparity=max_disparity,
-        mutual=mutual,
-    )
+    ratio = o.ratio if mode == "global" else o.band_ratio
+    m = _select(cand, features_left, rect, mode, ratio, o)
     if dense is not None:
-        m = m.subset(_verify_dense(m, dense, dense_tol_px, edge_px, edge_window))
+        m = m.subset(_verify_dense(m, dense, o.dense_tol_px, o.edge_px, o.edge_window))
     return m
 
 
