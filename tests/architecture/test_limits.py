@@ -45,7 +45,6 @@ KNOWN: dict[tuple[str, str, str], int] = {
     ("parameters", "cli/points.py", "points_cmd"): 13,
     # a typer command: one parameter per CLI option (issue 14: the RGB-D sources added 8)
     ("parameters", "cli/watch.py", "watch_cmd"): 26,
-    ("parameters", "perception/rgbd.py", "measure_object"): 11,
     ("parameters", "tools/fuzz/runner.py", "_outcome"): 9,
 }
 

@@ -10,6 +10,7 @@ from scenespeak.perception.intrinsics import Intrinsics
 from scenespeak.perception.masks import Box
 from scenespeak.perception.rgbd import (
     MeasuredObject,
+    MeasureOptions,
     RGBDOptions,
     box_span,
     estimate_support_plane,
@@ -276,3 +277,18 @@ def test_options_object_and_the_old_keywords_describe_alike() -> None:
         ).summary
         == ""
     )
+
+
+def test_measure_options_and_the_old_keywords_measure_alike() -> None:
+    depth, inst, _ = rs.render()
+    ys, xs = np.nonzero(inst == 1)
+    stage = RGBDOptions(min_pixels=30)
+    old = measure_object("a", "a", ys, xs, depth, CAM, (0, -1, 0), surface="nearest", options=stage)
+    how = MeasureOptions(surface="nearest", rgbd=stage)
+    new = measure_object("a", "a", ys, xs, depth, CAM, (0, -1, 0), options=how)
+    assert isinstance(old, MeasuredObject) and isinstance(new, MeasuredObject)
+    assert (old.source, old.pixels, old.kept_pixels) == (new.source, new.pixels, new.kept_pixels)
+    assert np.array_equal(old.object.centroid, new.object.centroid)
+    # a keyword sets its field on top of the options object
+    boxed = measure_object("a", "a", ys, xs, depth, CAM, (0, -1, 0), options=how, source="box")
+    assert isinstance(boxed, MeasuredObject) and boxed.source == "box"

@@ -48,9 +48,9 @@ frame of the contract (x = column, y = image up = ``height - 1 - row``, pixels).
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import lru_cache
-from typing import Literal
+from typing import Literal, TypedDict, Unpack
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -61,6 +61,7 @@ from scenespeak.perception.objects import Skipped, convex_hull, plane_basis
 from scenespeak.perception.surfaces import box_span, connected_surface, surface_modes
 
 __all__ = [
+    "MeasureOptions",
     "MeasuredObject",
     "RGBDOptions",
     "SupportPlane",
@@ -194,6 +195,47 @@ class SupportPlane:
         return np.asarray(xyz, np.float64) @ np.asarray(self.normal) - self.offset
 
 
+@dataclass(frozen=True)
+class MeasureOptions:
+    """How :func:`measure_object` reads one region's pixels.
+
+    Attributes
+    ----------
+    surface : {"largest", "connected", "nearest", "spanning"}
+        Which depth mode is the object: the largest; the largest and the pixels
+        depth-continuous with it (a mask: :func:`connected_surface`); the nearest substantial
+        one (an outline: the wall behind is farther); the nearest substantial one that spans
+        the region's extent (a box: :func:`box_span`).
+    plane : SupportPlane or None
+        Pixels on it are dropped first (for boxes and outlines).
+    source : str
+        Recorded in :attr:`MeasuredObject.source`.
+    rgbd : RGBDOptions
+        The stage's options (depth modes, plane clearance, minimum pixels).
+    """
+
+    surface: Surface = "largest"
+    plane: SupportPlane | None = None
+    source: str = "mask"
+    rgbd: RGBDOptions = field(default_factory=RGBDOptions)
+
+
+class MeasureKeywords(TypedDict, total=False):
+    """:func:`measure_object`'s ``options`` and earlier keywords (each sets its field)."""
+
+    options: MeasureOptions | RGBDOptions | None
+    surface: Surface
+    plane: SupportPlane | None
+    source: str
+
+
+def _measure_options(keywords: MeasureKeywords) -> MeasureOptions:
+    given = keywords.get("options")
+    o = given if isinstance(given, MeasureOptions) else MeasureOptions(rgbd=given or RGBDOptions())
+    fields = {k: v for k, v in keywords.items() if k != "options"}
+    return replace(o, **fields) if fields else o  # type: ignore[arg-type]
+
+
 def backproject(us: ArrayLike, vs: ArrayLike, z: ArrayLike, cam: Intrinsics) -> NDArray[np.float64]:
     """Pixels ``(u = column, v = row)`` with depth ``z`` to 3-D points ``(N, 3)``.
 
@@ -265,11 +307,7 @@ def measure_object(
     depth: NDArray[np.floating],
     cam: Intrinsics,
     up: ArrayLike,
-    *,
-    surface: Surface = "largest",
-    plane: SupportPlane | None = None,
-    source: str = "mask",
-    options: RGBDOptions | None = None,
+    **keywords: Unpack[MeasureKeywords],
 ) -> MeasuredObject | Skipped:
     """One object from its pixels (rows ``ys``, columns ``xs``) and the depth image.
 
@@ -285,23 +323,17 @@ def measure_object(
         The depth image's (= the colour image's) camera.
     up : (3,) array_like
         World up in the camera frame.
-    surface : {"largest", "connected", "nearest", "spanning"}
-        Which depth mode is the object: the largest; the largest and the pixels
-        depth-continuous with it (a mask: :func:`connected_surface`); the nearest substantial
-        one (an outline: the wall behind is farther); the nearest substantial one that spans
-        the region's extent (a box: :func:`box_span`).
-    plane : SupportPlane, optional
-        Pixels on it are dropped first (for boxes and outlines).
-    source : str
-        Recorded in :attr:`MeasuredObject.source`.
-    options : RGBDOptions, optional
+    **keywords
+        ``options``: a :class:`MeasureOptions` or an :class:`RGBDOptions` (the stage's alone);
+        the earlier ``surface``, ``plane``, ``source`` set their fields of it.
 
     Returns
     -------
     MeasuredObject or Skipped
         ``Skipped`` (with the reason) when fewer than ``min_pixels`` pixels remain.
     """
-    o = options or RGBDOptions()
+    mo = _measure_options(keywords)
+    o, surface, plane, source = mo.rgbd, mo.surface, mo.plane, mo.source
     n_pix = len(ys)
     extent = (
         (int(xs.min()), int(ys.min()), int(xs.max()) + 1, int(ys.max()) + 1)
