@@ -30,7 +30,6 @@ KNOWN: dict[tuple[str, str, str], int] = {
     # owned by the spatial-speed issue (16): the forces package
     ("parameters", "spatial/forces/_sweep.py", "sweep"): 10,
     # not split yet (see the note of issue 9)
-    ("lines", "perception/calibration.py", ""): 900,
     ("lines", "perception/recognition/store.py", ""): 610,
     ("parameters", "perception/recognition/ivf.py", "_build"): 10,
     # landed by other issues during this session (after the limits test): to split
