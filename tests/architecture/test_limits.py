@@ -39,7 +39,6 @@ KNOWN: dict[tuple[str, str, str], int] = {
     ("complexity", "tools/fuzz/options.py", "options"): 19,
     ("complexity", "tools/fuzz/runner.py", "_classify_error"): 19,
     ("complexity", "tools/fuzz/runner.py", "classify"): 20,
-    ("lines", "tools/fuzz/files.py", ""): 968,
     ("parameters", "cli/annotate.py", "annotate_cmd"): 10,
     ("parameters", "cli/points.py", "points_cmd"): 13,
     # a typer command: one parameter per CLI option (issue 14: the RGB-D sources added 8)

@@ -11,8 +11,10 @@ one line naming ``names``), ``"ok"`` (exit 0 / a return value) or ``"either"`` (
 hang or memory blow-up; a refusal, if any, one clean line). A ``check`` can look at the output
 and call it silently wrong or data loss.
 
-The families and their builders are in :mod:`~scenespeak.tools.fuzz.files` (images, masks,
-depth, calibration, dataset and truth files), :mod:`~scenespeak.tools.fuzz.dbcases` (the
+The families and their builders are in :mod:`~scenespeak.tools.fuzz.files` (images and masks
+in :mod:`~scenespeak.tools.fuzz.images`, calibrations in
+:mod:`~scenespeak.tools.fuzz.calibrations`, datasets and truth files in
+:mod:`~scenespeak.tools.fuzz.datasets`), :mod:`~scenespeak.tools.fuzz.dbcases` (the
 database and the ``db`` commands), :mod:`~scenespeak.tools.fuzz.options` (every CLI option)
 and :mod:`~scenespeak.tools.fuzz.apicases` (the Python API).
 """

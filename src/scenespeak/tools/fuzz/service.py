@@ -104,7 +104,7 @@ def _upload(
 
 def _image_uploads() -> dict[str, tuple[Callable[[], bytes], str]]:
     """Bad bytes for one image field, and what the refusal must name."""
-    from scenespeak.tools.fuzz.files import png_header_only
+    from scenespeak.tools.fuzz.images import png_header_only
 
     pair = functools.cache(card_pair)
     rng = np.random.default_rng(12)
@@ -126,13 +126,13 @@ def _image_uploads() -> dict[str, tuple[Callable[[], bytes], str]]:
 
 
 def _jpeg_claims() -> bytes:
-    from scenespeak.tools.fuzz.files import _jpeg_huge
+    from scenespeak.tools.fuzz.images import _jpeg_huge
 
     return _jpeg_huge()
 
 
 def _calib_uploads() -> dict[str, bytes]:
-    from scenespeak.tools.fuzz.files import _billion_laughs
+    from scenespeak.tools.fuzz.calibrations import _billion_laughs
 
     ok = {"baseline": 0.12, "hfov_deg": 60.0, "image_size": [W, H]}
     return {

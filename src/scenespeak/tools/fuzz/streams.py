@@ -122,7 +122,7 @@ def _depth_variants(w: Writer) -> dict[str, tuple[Path, Expect]]:
 
 
 def _header_only(width: int, height: int) -> bytes:
-    from scenespeak.tools.fuzz.files import png_header_only
+    from scenespeak.tools.fuzz.images import png_header_only
 
     return png_header_only(width, height)
 
@@ -223,7 +223,7 @@ def _mask_and_label_cases(
 
 
 def _intrinsics_cases(w: Writer, argv: Callable[..., tuple[str, ...]]) -> None:
-    from scenespeak.tools.fuzz.files import _billion_laughs
+    from scenespeak.tools.fuzz.calibrations import _billion_laughs
 
     make = argv
     variants: dict[str, tuple[str, Expect]] = {
