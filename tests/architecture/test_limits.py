@@ -23,12 +23,8 @@ pytest.importorskip("radon", reason="radon measures the complexity (pip install 
 SLACK = {"lines": 60, "complexity": 2, "parameters": 1}
 #: (kind, module, name) → the value measured when it was listed.
 KNOWN: dict[tuple[str, str, str], int] = {
-    # the public signature of interfaces.md (its last parameter is the Thresholds options)
-    ("parameters", "spatial/language/rules.py", "describe_relation"): 9,
     # a typer command: one parameter per CLI option
     ("parameters", "cli/describe.py", "describe_cmd"): 25,
-    # owned by the spatial-speed issue (16): the forces package
-    ("parameters", "spatial/forces/_sweep.py", "sweep"): 10,
     # not split yet (see the note of issue 9)
     ("lines", "perception/recognition/store.py", ""): 610,
     ("parameters", "perception/recognition/ivf.py", "_build"): 10,

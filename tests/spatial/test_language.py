@@ -344,6 +344,21 @@ def test_surround_rule_on_synthetic() -> None:
     assert rel.sentence == "The tray surrounds the coin."
 
 
+def test_facts_object_and_keywords_agree() -> None:
+    flat = np.ones(N)
+    facts = language.RelationFacts(overlap=0.1, referent_overlap=1.0, vertical="on top of")
+    by_object = describe_relation(flat, flat, "tray", "coin", facts=facts)
+    by_keywords = describe_relation(
+        flat, flat, "tray", "coin", overlap=0.1, referent_overlap=1.0, vertical="on top of"
+    )
+    assert by_object == by_keywords
+    assert by_object.vertical == "on top of" and by_object.overlap == 0.1
+    with pytest.raises(InputError, match="not both"):
+        describe_relation(flat, flat, facts=facts, overlap=0.0)
+    with pytest.raises(TypeError, match="unexpected keyword argument 'overlapp'"):
+        describe_relation(flat, flat, overlapp=0.0)  # type: ignore[call-arg]
+
+
 # -- Grammar ----------------------------------------------------------------------------------
 def test_every_combination_is_grammatical() -> None:
     seen = set()

@@ -329,21 +329,23 @@ def _walk_f0_f2(
 
 @jit
 def sweep(
-    pts: np.ndarray,
-    nxt: np.ndarray,
-    region_start: np.ndarray,
-    origin: np.ndarray,
+    regions: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray],
     pair_a: np.ndarray,
     pair_b: np.ndarray,
     y0: np.ndarray,
-    codes: np.ndarray,
-    rs: np.ndarray,
+    kernels: tuple[np.ndarray, np.ndarray],
     directions: int,
 ) -> np.ndarray:
     """Force histograms of many pairs of regions, shape ``(pairs, kernels, directions)``.
 
+    The regions and the kernels come as tuples of arrays (Numba takes a tuple of arrays as one
+    argument, not a dataclass): ``regions = (pts, nxt, region_start, origin)`` and
+    ``kernels = (codes, rs)``.
+
     Parameters
     ----------
+    regions : tuple
+        ``(pts, nxt, region_start, origin)``, as below.
     pts : (E, 2) float
         Every region's vertices, region after region, each relative to its ``origin``.
     nxt : (E,) int
@@ -356,12 +358,16 @@ def sweep(
         The argument and referent region of each pair.
     y0 : (P,) float
         The hybrid kernel's ``Y0`` of each pair (read for code 2 only).
+    kernels : tuple
+        ``(codes, rs)``, as below.
     codes, rs : (K,)
         The kernels (see the module docstring).
     directions : int
         Histogram bins; with an even number only half are swept (``F(θ + π)`` from the
         same pairs through ``Φ⁺(-d)``); with an odd number the θ + π parts are dropped.
     """
+    pts, nxt, region_start, origin = regions
+    codes, rs = kernels
     n_pairs = pair_a.size
     n_k = codes.size
     both = directions % 2 == 0

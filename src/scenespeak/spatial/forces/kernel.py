@@ -132,20 +132,15 @@ def sweep_pairs(
         return _reference(regions, pairs, kernels, list(y0_arr), directions)
     from scenespeak.spatial.forces._sweep import sweep
 
-    pts, nxt, region_start, origin = _packed(regions)
     index = np.asarray(pairs, dtype=np.int64).reshape(-1, 2)
     codes = np.array([k.code for k in kernels], dtype=np.int64)
     rs = np.array([k.r for k in kernels], dtype=np.float64)
     out: FloatArray = sweep(
-        pts,
-        nxt,
-        region_start,
-        origin,
+        _packed(regions),
         np.ascontiguousarray(index[:, 0]),
         np.ascontiguousarray(index[:, 1]),
         y0_arr,
-        codes,
-        rs,
+        (codes, rs),
         int(directions),
     )
     return out

@@ -54,7 +54,7 @@ from scenespeak.spatial.language.pairs import (
 )
 from scenespeak.spatial.language.relate import relate, relate_objects
 from scenespeak.spatial.language.relation import Relation
-from scenespeak.spatial.language.rules import describe_relation
+from scenespeak.spatial.language.rules import RelationFacts, describe_relation
 from scenespeak.spatial.language.summary import summarize_scene
 from scenespeak.spatial.language.table import layout_table, main, update_doc_table
 from scenespeak.spatial.language.thresholds import DEFAULT_THRESHOLDS, Thresholds
@@ -76,6 +76,7 @@ __all__ = [
     "VIEWER_PATTERNS",
     "PairHistograms",
     "Relation",
+    "RelationFacts",
     "Thresholds",
     "describe_relation",
     "describe_viewer_relation",

@@ -11,6 +11,7 @@ import functools
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from typing import TypedDict, Unpack
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -21,7 +22,7 @@ from scenespeak.spatial.language.relation import Relation
 from scenespeak.spatial.language.thresholds import DEFAULT_THRESHOLDS, Thresholds
 from scenespeak.spatial.language.words import VERTICAL_WORDS, _Decision, _label, _render
 
-__all__ = ["describe_relation"]
+__all__ = ["FactKeywords", "RelationFacts", "describe_relation"]
 
 _ANGLE_DEG = {"right": 0.0, "behind": 90.0, "left": 180.0, "front": 270.0}
 
@@ -275,28 +276,12 @@ def _decide(
     )
 
 
-def describe_relation(
-    f0: ArrayLike,
-    f2: ArrayLike,
-    argument: str = "A",
-    referent: str = "B",
-    *,
-    overlap: float | None = None,
-    referent_overlap: float | None = None,
-    vertical: str | None = None,
-    hybrid: bool = False,
-    thresholds: Thresholds | None = None,
-) -> Relation:
-    """Describe where the argument is relative to the referent from their force histograms.
+@dataclass(frozen=True)
+class RelationFacts:
+    """What :func:`describe_relation` is told about a pair besides its histograms.
 
-    Parameters
+    Attributes
     ----------
-    f0, f2 : array_like, shape (N,)
-        F0 (constant forces) and F2 (gravitational forces) of the argument relative to the
-        referent, bin ``k`` at angle ``2πk/N`` (0 = right, π/2 = behind). Pass the hybrid F02
-        as ``f2`` where F2 is undefined. ``N`` must be a multiple of 4.
-    argument, referent : str
-        Labels used in the sentence.
     overlap : float, optional
         area(A ∩ B) / area(A) if known. ``0`` rules out "surrounded" (disjoint objects cannot
         surround each other); ``None`` lets the histograms decide alone.
@@ -308,8 +293,73 @@ def describe_relation(
         ``sentence`` (the horizontal words stay in ``horizontal_sentence``).
     hybrid : bool
         Recorded in the relation: ``f2`` is the hybrid F02.
+
+    Examples
+    --------
+    >>> h = np.zeros(180); h[80] = 1.0
+    >>> describe_relation(h, h, facts=RelationFacts(overlap=0.0)).primary
+    'left'
+    """
+
+    overlap: float | None = None
+    referent_overlap: float | None = None
+    vertical: str | None = None
+    hybrid: bool = False
+
+
+class FactKeywords(TypedDict, total=False):
+    """The fields of :class:`RelationFacts` given one by one (``overlap=0.0``)."""
+
+    overlap: float | None
+    referent_overlap: float | None
+    vertical: str | None
+    hybrid: bool
+
+
+def _facts_of(facts: RelationFacts | None, keywords: FactKeywords) -> RelationFacts:
+    """``facts``, or the :class:`RelationFacts` of the keywords (never both)."""
+    unknown = sorted(set(keywords) - set(FactKeywords.__annotations__))
+    if unknown:
+        raise TypeError(f"describe_relation() got an unexpected keyword argument {unknown[0]!r}")
+    if facts is None:
+        return RelationFacts(**keywords)
+    if keywords:
+        raise InputError(
+            "facts",
+            f"given together with {', '.join(sorted(keywords))}: pass either "
+            "facts=RelationFacts(...) or the keywords overlap=..., vertical=..., not both",
+        )
+    return facts
+
+
+def describe_relation(
+    f0: ArrayLike,
+    f2: ArrayLike,
+    argument: str = "A",
+    referent: str = "B",
+    *,
+    facts: RelationFacts | None = None,
+    thresholds: Thresholds | None = None,
+    **keywords: Unpack[FactKeywords],
+) -> Relation:
+    """Describe where the argument is relative to the referent from their force histograms.
+
+    Parameters
+    ----------
+    f0, f2 : array_like, shape (N,)
+        F0 (constant forces) and F2 (gravitational forces) of the argument relative to the
+        referent, bin ``k`` at angle ``2πk/N`` (0 = right, π/2 = behind). Pass the hybrid F02
+        as ``f2`` where F2 is undefined. ``N`` must be a multiple of 4.
+    argument, referent : str
+        Labels used in the sentence.
+    facts : RelationFacts, optional
+        The overlaps, the vertical relation and whether ``f2`` is the hybrid F02 (see
+        :class:`RelationFacts`); none known by default.
     thresholds : Thresholds, optional
         The rule base's thresholds; defaults documented in :class:`Thresholds`.
+    **keywords
+        The fields of :class:`RelationFacts` one by one (``overlap=0.0``, ``referent_overlap``,
+        ``vertical``, ``hybrid``), as before ``facts`` existed; not together with ``facts``.
 
     Returns
     -------
@@ -319,7 +369,8 @@ def describe_relation(
     ------
     InputError
         For histograms of the wrong shape, with negative or non-finite values, or of different
-        lengths; for an unknown ``vertical`` word or empty labels.
+        lengths; for an unknown ``vertical`` word or empty labels; for ``facts`` given together
+        with its keywords.
 
     Examples
     --------
@@ -328,6 +379,9 @@ def describe_relation(
     >>> rel.primary, rel.secondary, rel.hedge, rel.secondary_hedge
     ('left', 'behind', 'mostly', 'slightly')
     """
+    given = _facts_of(facts, keywords)
+    overlap, referent_overlap = given.overlap, given.referent_overlap
+    vertical, hybrid = given.vertical, given.hybrid
     t = thresholds or DEFAULT_THRESHOLDS
     argument = _label(argument, "argument")
     referent = _label(referent, "referent")
@@ -339,8 +393,8 @@ def describe_relation(
         raise InputError("f2", f"has {h2.size} bins but f0 has {h0.size}; use one `directions`")
     if vertical is not None and vertical not in VERTICAL_WORDS:
         raise InputError("vertical", f"must be one of {sorted(VERTICAL_WORDS)} or None")
-    facts = _Facts(overlap, referent_overlap, vertical, hybrid, "object")
-    return _relation_from(h0, h2, (argument, referent), t, facts)
+    told = _Facts(overlap, referent_overlap, vertical, hybrid, "object")
+    return _relation_from(h0, h2, (argument, referent), t, told)
 
 
 @dataclass(frozen=True)
