@@ -129,6 +129,43 @@ _ALLOWED_TAG_PREFIXES = ("tag:yaml.org,2002:",)
 _REFUSED_TAG_PREFIXES = ("tag:yaml.org,2002:python/",)
 
 
+def _check_tag(n: yaml.Node, source: str | PathLike[str], error: ErrorType) -> None:
+    """Refuse a node whose tag is python's or not one of YAML's own."""
+    tag = n.tag or ""
+    if tag.startswith(_REFUSED_TAG_PREFIXES) or not tag.startswith(_ALLOWED_TAG_PREFIXES):
+        raise error(source, f"uses the YAML tag {clean_text(tag)!r}, which is not allowed")
+
+
+def _yaml_children(n: yaml.Node) -> list[yaml.Node]:
+    """A node's children: a sequence's items, a mapping's keys and values."""
+    if isinstance(n, yaml.SequenceNode):
+        return list(n.value)
+    if isinstance(n, yaml.MappingNode):
+        return [x for kv in n.value for x in kv]
+    return []
+
+
+def _record_size(
+    n: yaml.Node,
+    children: list[yaml.Node],
+    sizes: dict[int, int],
+    source: str | PathLike[str],
+    error: ErrorType,
+) -> None:
+    """Memoise ``n``'s expanded size (its children's are known) and refuse it over the limit."""
+    total = 1 + sum(sizes[id(c)] for c in children)
+    sizes[id(n)] = total
+    if total > _limits.current().max_yaml_nodes:
+        raise error(
+            source,
+            _limits.exceeded(
+                "max_yaml_nodes",
+                f"the YAML expands to more than {total} nodes (aliases), which",
+                0,
+            ),
+        )
+
+
 def _yaml_walk(node: yaml.Node, source: str | PathLike[str], error: ErrorType) -> None:
     """Refuse unknown tags, deep nesting, and alias expansion over ``max_yaml_nodes``."""
     lim = _limits.current()
@@ -141,26 +178,10 @@ def _yaml_walk(node: yaml.Node, source: str | PathLike[str], error: ErrorType) -
             continue
         if depth > lim.max_nesting:
             _check_depth(depth, source, error)
-        tag = n.tag or ""
-        if tag.startswith(_REFUSED_TAG_PREFIXES) or not tag.startswith(_ALLOWED_TAG_PREFIXES):
-            raise error(source, f"uses the YAML tag {clean_text(tag)!r}, which is not allowed")
-        children: list[yaml.Node] = []
-        if isinstance(n, yaml.SequenceNode):
-            children = list(n.value)
-        elif isinstance(n, yaml.MappingNode):
-            children = [x for kv in n.value for x in kv]
+        _check_tag(n, source, error)
+        children = _yaml_children(n)
         if done:
-            total = 1 + sum(sizes[id(c)] for c in children)
-            sizes[id(n)] = total
-            if total > lim.max_yaml_nodes:
-                raise error(
-                    source,
-                    _limits.exceeded(
-                        "max_yaml_nodes",
-                        f"the YAML expands to more than {total} nodes (aliases), which",
-                        0,
-                    ),
-                )
+            _record_size(n, children, sizes, source, error)
             continue
         stack.append((n, depth, True))
         for c in children:

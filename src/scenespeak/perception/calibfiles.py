@@ -58,23 +58,32 @@ def _check_matrices(data: Any, source: Path) -> None:
         return
     for key, value in data.items():
         if isinstance(value, Mapping) and "data" in value:
-            sizes = value.get("sizes")
-            if isinstance(sizes, list) and sizes:  # opencv-nd-matrix (OpenCV 5 writes 1-D so)
-                rows, cols = sizes[0], int(np.prod(sizes[1:])) if len(sizes) > 1 else 1
-            else:
-                rows, cols = value.get("rows", 1), value.get("cols", 1)
-            if not all(isinstance(v, int) and not isinstance(v, bool) for v in (rows, cols)):
-                raise CalibrationError(source, f"{key}: rows and cols must be whole numbers")
-            if rows < 1 or cols < 1 or rows * cols > _MAX_MATRIX:
-                raise CalibrationError(
-                    source, f"{key}: a {rows} x {cols} matrix is not a calibration matrix"
-                )
-            items = value["data"]
-            if not isinstance(items, list) or len(items) != rows * cols:
-                n = len(items) if isinstance(items, list) else "no list of"
-                raise CalibrationError(
-                    source, f"{key}: rows x cols = {rows * cols} but data has {n} numbers"
-                )
+            _check_matrix(key, value, source)
+
+
+def _rows_cols(value: Mapping[str, Any]) -> tuple[Any, Any]:
+    """The rows and columns a matrix entry claims (``sizes`` of an opencv-nd-matrix first)."""
+    sizes = value.get("sizes")
+    if isinstance(sizes, list) and sizes:  # opencv-nd-matrix (OpenCV 5 writes 1-D so)
+        return sizes[0], int(np.prod(sizes[1:])) if len(sizes) > 1 else 1
+    return value.get("rows", 1), value.get("cols", 1)
+
+
+def _check_matrix(key: Any, value: Mapping[str, Any], source: Path) -> None:
+    """One ``{rows, cols, data}`` entry: whole, bounded sizes and as many numbers as claimed."""
+    rows, cols = _rows_cols(value)
+    if not all(isinstance(v, int) and not isinstance(v, bool) for v in (rows, cols)):
+        raise CalibrationError(source, f"{key}: rows and cols must be whole numbers")
+    if rows < 1 or cols < 1 or rows * cols > _MAX_MATRIX:
+        raise CalibrationError(
+            source, f"{key}: a {rows} x {cols} matrix is not a calibration matrix"
+        )
+    items = value["data"]
+    if not isinstance(items, list) or len(items) != rows * cols:
+        n = len(items) if isinstance(items, list) else "no list of"
+        raise CalibrationError(
+            source, f"{key}: rows x cols = {rows * cols} but data has {n} numbers"
+        )
 
 
 _CAMERA_KEYS = (
