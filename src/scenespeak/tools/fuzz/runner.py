@@ -111,6 +111,18 @@ def classify(
         return "hang", f"still running after {case.timeout:g} s"
     if code is None or code < 0:
         return "crash", f"killed by signal {-(code or 0)}"
+    found = _failed(code, out, err, rss)
+    if found is None and case.check is not None:
+        found = case.check(code, out, err)
+    if found is not None:
+        return found
+    if code == 0:
+        return _accepted(case, err)
+    return _classify_error(case, code, err, options)
+
+
+def _failed(code: int, out: str, err: str, rss: int) -> tuple[str, str] | None:
+    """Memory, a traceback or a wrong answer the case itself reported (else None)."""
     if rss > MEMORY_BOUND:
         return "memory", f"peak RSS {rss / 2**20:.0f} MiB"
     if code == _EXIT_MEMORY or re.search(r"MemoryError|Insufficient memory|bad_alloc", err):
@@ -119,27 +131,25 @@ def classify(
         return "traceback", _last(err)
     if code == _EXIT_WRONG:
         return "silently wrong", _first(out)
-    if case.check is not None:
-        found = case.check(code, out, err)
-        if found is not None:
-            return found
-    if code == 0:
-        if case.expect == "error":
-            return "silently wrong", "accepted (exit 0) an input that must be refused"
-        noise = [
-            ln
-            for ln in err.splitlines()
-            if ln.strip() and not ln.startswith(("scenespeak: waiting", "scenespeak: warning"))
-        ]
-        if noise and case.argv is not None:
-            return "not one line", "succeeded but printed on stderr: " + noise[0][:120]
-        return "clean", "accepted"
-    return _classify_error(case, code, err, options)
+    return None
+
+
+def _accepted(case: Case, err: str) -> tuple[str, str]:
+    """The class of an exit 0: clean unless the input had to be refused or stderr is noisy."""
+    if case.expect == "error":
+        return "silently wrong", "accepted (exit 0) an input that must be refused"
+    noise = [
+        ln
+        for ln in err.splitlines()
+        if ln.strip() and not ln.startswith(("scenespeak: waiting", "scenespeak: warning"))
+    ]
+    if noise and case.argv is not None:
+        return "not one line", "succeeded but printed on stderr: " + noise[0][:120]
+    return "clean", "accepted"
 
 
 def _classify_error(case: Case, code: int, err: str, options: set[str]) -> tuple[str, str]:
-    from scenespeak.safeio import clean_text
-
+    """The class of a non-zero exit: one clean ``scenespeak: error:`` line, or what is wrong."""
     lines = [ln for ln in err.splitlines() if ln.strip()]
     if code != 2:
         return "traceback", f"exit status {code}: " + _first(err)
@@ -147,7 +157,13 @@ def _classify_error(case: Case, code: int, err: str, options: set[str]) -> tuple
         return "refused valid", _first(err)
     if len(lines) != 1 or not lines[0].startswith("scenespeak: error: "):
         return "not one line", f"{len(lines)} lines: " + " | ".join(x[:80] for x in lines[:3])
-    line = lines[0]
+    return _message_problem(case, lines[0], options) or ("clean", lines[0][:200])
+
+
+def _message_problem(case: Case, line: str, options: set[str]) -> tuple[str, str] | None:
+    """What is wrong with a one-line refusal (else None): the file, the words, the options."""
+    from scenespeak.safeio import clean_text
+
     if case.names and case.names not in line and clean_text(case.names) not in line:
         return "unclear message", f"does not name {case.names!r}: {line[:160]}"
     for needle in case.says:
@@ -158,7 +174,7 @@ def _classify_error(case: Case, code: int, err: str, options: set[str]) -> tuple
         return "unclear message", f"names an option that does not exist ({bogus[0]}): {line[:120]}"
     if "\x1b" in line:
         return "security", "a raw escape sequence in the message"
-    return "clean", line[:200]
+    return None
 
 
 def _first(text: str) -> str:
@@ -299,7 +315,7 @@ def run_cases(
             del running[pid]
             if pid in procs:  # reaped above, not by Popen: tell it so
                 procs.pop(pid).returncode = os.waitstatus_to_exitcode(status)
-            outcome = _outcome(case, k, status, usage, elapsed, out, err, timed_out, options)
+            outcome = _outcome(case, status, usage, elapsed, out, err, timed_out, options)
             results[k] = outcome
             if progress is not None:
                 progress(outcome)
@@ -322,7 +338,6 @@ def _read(fd: int) -> str:
 
 def _outcome(
     case: Case,
-    k: int,
     status: int,
     usage: resource.struct_rusage,
     elapsed: float,
