@@ -62,6 +62,15 @@ def _checked(fn: Callable[[], object], check: Callable[[object], object]) -> Cal
 
 
 def _histogram_cases(w: Writer) -> None:
+    """The force and hybrid histograms (and ``relate``) on bad polygons, masks and options."""
+    _polygon_cases(w)
+    _r_cases(w)
+    _directions_cases(w)
+    _mask_cases(w)
+    _hybrid_p_cases(w)
+
+
+def _polygon_cases(w: Writer) -> None:
     forces = "scenespeak.spatial.forces"
     polys: dict[str, tuple[Any, Any, Expect]] = {
         "complex": (SQ.astype(complex) + 1j, RIGHT, "error"),
@@ -108,6 +117,10 @@ def _histogram_cases(w: Writer) -> None:
                 expect=expect,
             )
         )
+
+
+def _r_cases(w: Writer) -> None:
+    forces = "scenespeak.spatial.forces"
     r_values: tuple[object, ...] = (
         1e6,
         -1e6,
@@ -126,6 +139,10 @@ def _histogram_cases(w: Writer) -> None:
         if isinstance(value, float) and abs(value) >= 1e6:
             call = _checked(call, _sane_histogram)
         w.add(Case(f"api/force_histogram/r={value!r}", "api", api=call, expect=expect))
+
+
+def _directions_cases(w: Writer) -> None:
+    forces = "scenespeak.spatial.forces"
     directions_values: tuple[object, ...] = (
         2**40,
         10**7,
@@ -159,6 +176,10 @@ def _histogram_cases(w: Writer) -> None:
                 api=_call("scenespeak.spatial.language", "relate", SQ, RIGHT, directions=value),
             )
         )
+
+
+def _mask_cases(w: Writer) -> None:
+    forces = "scenespeak.spatial.forces"
     mask_a = np.zeros((20, 20), bool)
     mask_a[2:8, 2:8] = True
     mask_b = np.zeros((20, 20), bool)
@@ -194,6 +215,10 @@ def _histogram_cases(w: Writer) -> None:
                 api=_checked(call, _sane_histogram) if ok else call,
             )
         )
+
+
+def _hybrid_p_cases(w: Writer) -> None:
+    forces = "scenespeak.spatial.forces"
     for p0, p1 in (
         (0.0, 3.0),
         (-1.0, 3.0),
