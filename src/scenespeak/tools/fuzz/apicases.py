@@ -135,7 +135,7 @@ def _r_cases(w: Writer) -> None:
     )
     for value in r_values:
         call = _call(forces, "force_histogram", SQ, RIGHT, r=value, directions=16)
-        expect = "either" if isinstance(value, float) and np.isfinite(value) else "error"
+        expect: Expect = "either" if isinstance(value, float) and np.isfinite(value) else "error"
         if isinstance(value, float) and abs(value) >= 1e6:
             call = _checked(call, _sane_histogram)
         w.add(Case(f"api/force_histogram/r={value!r}", "api", api=call, expect=expect))

@@ -19,11 +19,31 @@ def _untouched(path: Path, content: bytes) -> Checker:
     return check
 
 
-def options(w: Writer, base: Base) -> None:  # noqa: C901 (complexity 17 > 15: to be split)
+def options(w: Writer, base: Base) -> None:
     """Bad values of every option of every command."""
+    _points_options(w, base)
+    _describe_options(w, base)
+    _generate_options(w, base)
+    _evaluate_options(w, base)
+    _usage_options(w, base)
+    _limit_options(w, base)
+    _value_options(w, base)
+
+
+def _commands(
+    base: Base,
+) -> tuple[tuple[str, str], tuple[str, str], tuple[str, ...], tuple[str, ...]]:
+    """The stereo pair, the --calib option and the ``points`` and ``describe`` command lines."""
     pair = (str(base.left), str(base.right))
     calib = ("--calib", str(base.calib))
     points = ("points", *calib, *pair, "-q")
+    describe = ("describe", "--db", str(base.db), *calib, *pair, "-q")
+    return pair, calib, points, describe
+
+
+def _points_options(w: Writer, base: Base) -> None:
+    """``points``: --ratio, --format and --out."""
+    _pair, _calib, points, _describe = _commands(base)
     for value, expect in (
         ("0", "error"),
         ("-1", "error"),
@@ -83,7 +103,11 @@ def options(w: Writer, base: Base) -> None:  # noqa: C901 (complexity 17 > 15: t
             names=str(out_dir),
         )
     )
-    describe = ("describe", "--db", str(base.db), *calib, *pair, "-q")
+
+
+def _describe_options(w: Writer, base: Base) -> None:
+    """``describe``: --format and --figures (a file, planted symlinks, a folder in the way)."""
+    _pair, _calib, _points, describe = _commands(base)
     w.add(
         Case(
             "option/describe--format=xml",
@@ -148,6 +172,10 @@ def options(w: Writer, base: Base) -> None:  # noqa: C901 (complexity 17 > 15: t
             timeout=60.0,
         )
     )
+
+
+def _generate_options(w: Writer, base: Base) -> None:
+    """``scenes generate`` and ``demo``: --seed, --n and an output that is a file."""
     for value, expect in (
         ("-1", "error"),
         ("abc", "error"),
@@ -195,6 +223,10 @@ def options(w: Writer, base: Base) -> None:  # noqa: C901 (complexity 17 > 15: t
     w.add(
         Case("option/demo-into-file", "options", ("demo", str(genfile), "-q"), names=str(genfile))
     )
+
+
+def _evaluate_options(w: Writer, base: Base) -> None:
+    """``evaluate``: --workers and a missing --db."""
     ev = ("evaluate", str(base.dataset), "--db", str(base.db), "-q")
     for value in ("0", "-1", "abc", str(10**6), str(2**70)):
         w.add(
@@ -221,6 +253,11 @@ def options(w: Writer, base: Base) -> None:  # noqa: C901 (complexity 17 > 15: t
             names="nope.db",
         )
     )
+
+
+def _usage_options(w: Writer, base: Base) -> None:
+    """Usage errors: missing arguments and options, unknown commands and options."""
+    pair, calib, _points, _describe = _commands(base)
     for argv, names in (
         (("describe", *pair), "--db"),
         (("describe", "--db", str(base.db), *calib, str(base.left)), "right"),
@@ -242,6 +279,11 @@ def options(w: Writer, base: Base) -> None:  # noqa: C901 (complexity 17 > 15: t
                 names=names,
             )
         )
+
+
+def _limit_options(w: Writer, base: Base) -> None:
+    """The global --limit option."""
+    pair, _calib, points, _describe = _commands(base)
     for value, says in (
         ("nonsense=5", "NAME=VALUE"),
         ("max_nesting=-1", "positive"),
@@ -287,6 +329,11 @@ def options(w: Writer, base: Base) -> None:  # noqa: C901 (complexity 17 > 15: t
             names="deep-list.json",
         )
     )
+
+
+def _value_options(w: Writer, base: Base) -> None:
+    """--image-size, --units and --up of ``points``, --pitch of ``describe``."""
+    _pair, _calib, points, describe = _commands(base)
     for name in ("image-size-bad", "image-size-zero", "image-size-huge"):
         value = {
             "image-size-bad": "abc",
