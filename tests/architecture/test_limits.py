@@ -26,8 +26,6 @@ KNOWN: dict[tuple[str, str, str], int] = {
     # a typer command: one parameter per CLI option
     ("parameters", "cli/describe.py", "describe_cmd"): 25,
     # not split yet (see the note of issue 9)
-    ("lines", "perception/recognition/store.py", ""): 610,
-    ("parameters", "perception/recognition/ivf.py", "_build"): 10,
     # landed by other issues during this session (after the limits test): to split
     ("parameters", "cli/annotate.py", "annotate_cmd"): 10,
     ("parameters", "cli/points.py", "points_cmd"): 13,

@@ -6,6 +6,7 @@ from __future__ import annotations
 import itertools
 from collections.abc import Callable, Iterator
 from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass, fields
 from typing import Any, Self, cast
 
 import numpy as np
@@ -162,6 +163,22 @@ def quantiser_fits(
     return bool(wrong.mean() <= 0.01) if wrong.size else True
 
 
+@dataclass(frozen=True)
+class _QuantiserOptions:
+    """The coarse quantiser's keywords of an index's constructor (``nlist``, ``train_size``,
+    ``iters``, ``seed``; a cached ``centroids`` + ``cells`` pair, used when it fits)."""
+
+    nlist: int | None = None
+    train_size: int = 65536
+    iters: int = 10
+    seed: int = 0
+    centroids: NDArray[np.float32] | None = None
+    cells: NDArray[np.integer] | None = None
+
+
+_QUANTISER = tuple(f.name for f in fields(_QuantiserOptions))
+
+
 class _IndexBuilder:
     """Construction shared by the inverted-file indexes: from one array or from chunks.
 
@@ -182,15 +199,12 @@ class _IndexBuilder:
         chunks: Callable[[], Iterator[NDArray[np.uint8]]],
         n: int,
         *,
-        nlist: int | None = None,
         nprobe: int = 4,
-        train_size: int = 65536,
-        iters: int = 10,
-        seed: int = 0,
-        centroids: NDArray[np.float32] | None = None,
-        cells: NDArray[np.integer] | None = None,
-        **extra: Any,
+        **options: Any,
     ) -> None:
+        # the quantiser's keywords (see _QuantiserOptions); the rest are the subclass's _fill's
+        quantiser = _QuantiserOptions(**{k: options.pop(k) for k in _QUANTISER if k in options})
+        centroids, cells = quantiser.centroids, quantiser.cells
         #: True when a cached quantiser was given but did not fit the data (then retrained).
         self.cache_rejected = False
         if centroids is not None and cells is not None:
@@ -200,15 +214,15 @@ class _IndexBuilder:
         self.centroids, assign = _quantise(
             chunks,
             n,
-            nlist=nlist,
-            train_size=train_size,
-            iters=iters,
-            seed=seed,
+            nlist=quantiser.nlist,
+            train_size=quantiser.train_size,
+            iters=quantiser.iters,
+            seed=quantiser.seed,
             centroids=centroids,
             cells=cells,
         )
         self.nprobe = nprobe
-        self._fill(chunks, n, assign, **extra)
+        self._fill(chunks, n, assign, **options)
 
     def _fill(
         self,

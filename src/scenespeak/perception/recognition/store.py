@@ -18,15 +18,11 @@ from scenespeak.errors import DatabaseError, InputError
 from scenespeak.perception import dbfiles
 from scenespeak.perception.features import Features
 from scenespeak.perception.recognition.index import (
-    _DIM,
     DescriptorIndex,
     IndexKind,
-    _auto_kind,
-    _have_faiss,
-    build_index,
 )
-from scenespeak.perception.recognition.ivf import FaissIndex, IVFIndex
 from scenespeak.perception.recognition.label import LabelOptions, _Loaded, label_features
+from scenespeak.perception.recognition.loading import index_of, read_views
 from scenespeak.perception.recognition.results import Labelling, ObjectInfo, TrainingView
 from scenespeak.perception.recognition.schema import (
     _SCHEMA,
@@ -37,8 +33,6 @@ from scenespeak.perception.recognition.schema import (
     _check_schema,
     _duplicate,
     _now,
-    cached_quantiser,
-    save_quantiser,
 )
 from scenespeak.perception.recognition.views import ImageLike, MaskLike, _extract_view, _ViewData
 from scenespeak.safeio import as_path
@@ -442,103 +436,11 @@ class ObjectDatabase:
                 "`scenespeak db add --db FILE --label NAME IMAGE`",
             )
         total = int(counts[1])
-        kp, object_of, view_of, sizes, labels, outlines = self._read_views(total)
-        index = self._build_index(gen, total, sizes, nprobe, seed)
+        kp, object_of, view_of, sizes, labels, outlines = read_views(self, total)
+        index = index_of(self, gen, total, sizes, nprobe, seed)
         self._loaded = _Loaded(
             gen, index, object_of, view_of, kp[:, :2], kp[:, 2], kp[:, 3], labels, outlines
         )
-
-    _SELECT_VIEWS = " FROM views v JOIN objects o ON o.id = v.object_id ORDER BY v.id"
-
-    def _read_views(
-        self, total: int
-    ) -> tuple[
-        NDArray[np.float32],
-        NDArray[np.int32],
-        NDArray[np.int32],
-        list[int],
-        dict[int, str],
-        dict[int, NDArray[np.float32]],
-    ]:
-        """Every view's keypoints (x, y, size, angle), object and view of each descriptor,
-        the views' sizes, the objects' labels and the views' outlines."""
-        kp = np.empty((total, 4), np.float32)
-        object_of = np.empty(total, np.int32)
-        view_of = np.empty(total, np.int32)
-        sizes: list[int] = []
-        labels: dict[int, str] = {}
-        outlines: dict[int, NDArray[np.float32]] = {}
-        s = 0
-        try:
-            cursor = self.conn.execute(
-                "SELECT v.id, v.object_id, o.label, v.n, v.keypoints, v.outline"
-                + self._SELECT_VIEWS
-            )
-            for vid, oid, lab, n, k_blob, o_blob in cursor:
-                n = int(n)
-                try:
-                    kp[s : s + n] = np.frombuffer(k_blob, np.float32).reshape(n, 4)
-                    outline = np.frombuffer(o_blob, np.float32).reshape(-1, 2).copy()
-                except ValueError:
-                    raise DatabaseError(
-                        self.path, f"view {vid} of {lab!r} is corrupt (wrong BLOB sizes)"
-                    ) from None
-                outlines[int(vid)] = outline
-                object_of[s : s + n] = oid
-                view_of[s : s + n] = vid
-                labels[int(oid)] = str(lab)
-                sizes.append(n)
-                s += n
-        except sqlite3.DatabaseError as exc:
-            raise DatabaseError(self.path, f"cannot be read (corrupt?): {exc}") from None
-        if s != total:
-            raise DatabaseError(self.path, "is corrupt (views without an object)")
-        return kp, object_of, view_of, sizes, labels, outlines
-
-    def _descriptor_chunks(self, sizes: list[int]) -> Iterator[NDArray[np.uint8]]:
-        """The descriptors, one view at a time (in the order of :meth:`_read_views`)."""
-        try:
-            rows = self.conn.execute("SELECT v.id, v.descriptors" + self._SELECT_VIEWS)
-            for (vid, blob), n in zip(rows, sizes, strict=True):
-                if len(blob) != n * _DIM:
-                    raise DatabaseError(
-                        self.path, f"view {vid} is corrupt (wrong descriptor BLOB size)"
-                    )
-                yield np.frombuffer(blob, np.uint8).reshape(n, _DIM)
-        except (sqlite3.DatabaseError, ValueError) as exc:
-            raise DatabaseError(self.path, f"cannot be read (corrupt?): {exc}") from None
-
-    def _build_index(
-        self, gen: int, total: int, sizes: list[int], nprobe: int, seed: int
-    ) -> DescriptorIndex:
-        """The index of :attr:`index_kind` over every descriptor (a cached quantiser reused)."""
-        kind = self.index_kind
-        if kind == "auto":
-            kind = _auto_kind(total)
-        if kind == "faiss" and not _have_faiss():
-            raise DatabaseError(
-                self.path, "index 'faiss' needs the faiss-cpu package (pip install faiss-cpu)"
-            )
-        if kind in ("ivf", "faiss"):
-            centroids, cells = cached_quantiser(self.conn, gen, total)
-            cls = IVFIndex if kind == "ivf" else FaissIndex
-            index = cls.from_chunks(
-                lambda: self._descriptor_chunks(sizes),
-                total,
-                nprobe=nprobe,
-                seed=seed,
-                centroids=centroids,
-                cells=cells,
-            )
-            if (centroids is None or index.cache_rejected) and not self.readonly:
-                save_quantiser(self.conn, gen, index)
-            return index
-        desc = np.empty((total, _DIM), np.uint8)
-        s = 0
-        for block in self._descriptor_chunks(sizes):
-            desc[s : s + block.shape[0]] = block
-            s += block.shape[0]
-        return build_index(desc, kind, nprobe=nprobe, seed=seed)
 
     def _set_nprobe(self, nprobe: int) -> None:
         if self._loaded is not None and hasattr(self._loaded.index, "nprobe"):

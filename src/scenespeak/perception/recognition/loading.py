@@ -1,0 +1,126 @@
+"""Loading an object database into memory: its views' keypoints and the descriptor index.
+
+:meth:`ObjectDatabase.load <scenespeak.perception.recognition.store.ObjectDatabase.load>` calls
+:func:`read_views` (keypoints, objects, views and outlines) and :func:`index_of` (the index of the
+database's kind over every descriptor, streamed one view at a time by
+:func:`descriptor_chunks`; an inverted file's cached quantiser reused).
+"""
+
+from __future__ import annotations
+
+import sqlite3
+from collections.abc import Iterator
+from typing import TYPE_CHECKING
+
+import numpy as np
+from numpy.typing import NDArray
+
+from scenespeak.errors import DatabaseError
+from scenespeak.perception.recognition.index import (
+    _DIM,
+    DescriptorIndex,
+    _auto_kind,
+    _have_faiss,
+    build_index,
+)
+from scenespeak.perception.recognition.ivf import FaissIndex, IVFIndex
+from scenespeak.perception.recognition.schema import cached_quantiser, save_quantiser
+
+if TYPE_CHECKING:
+    from scenespeak.perception.recognition.store import ObjectDatabase
+
+__all__ = ["descriptor_chunks", "index_of", "read_views"]
+
+
+_SELECT_VIEWS = " FROM views v JOIN objects o ON o.id = v.object_id ORDER BY v.id"
+
+
+def read_views(
+    db: ObjectDatabase, total: int
+) -> tuple[
+    NDArray[np.float32],
+    NDArray[np.int32],
+    NDArray[np.int32],
+    list[int],
+    dict[int, str],
+    dict[int, NDArray[np.float32]],
+]:
+    """Every view's keypoints (x, y, size, angle), object and view of each descriptor,
+    the views' sizes, the objects' labels and the views' outlines."""
+    kp = np.empty((total, 4), np.float32)
+    object_of = np.empty(total, np.int32)
+    view_of = np.empty(total, np.int32)
+    sizes: list[int] = []
+    labels: dict[int, str] = {}
+    outlines: dict[int, NDArray[np.float32]] = {}
+    s = 0
+    try:
+        cursor = db.conn.execute(
+            "SELECT v.id, v.object_id, o.label, v.n, v.keypoints, v.outline" + _SELECT_VIEWS
+        )
+        for vid, oid, lab, n, k_blob, o_blob in cursor:
+            n = int(n)
+            try:
+                kp[s : s + n] = np.frombuffer(k_blob, np.float32).reshape(n, 4)
+                outline = np.frombuffer(o_blob, np.float32).reshape(-1, 2).copy()
+            except ValueError:
+                raise DatabaseError(
+                    db.path, f"view {vid} of {lab!r} is corrupt (wrong BLOB sizes)"
+                ) from None
+            outlines[int(vid)] = outline
+            object_of[s : s + n] = oid
+            view_of[s : s + n] = vid
+            labels[int(oid)] = str(lab)
+            sizes.append(n)
+            s += n
+    except sqlite3.DatabaseError as exc:
+        raise DatabaseError(db.path, f"cannot be read (corrupt?): {exc}") from None
+    if s != total:
+        raise DatabaseError(db.path, "is corrupt (views without an object)")
+    return kp, object_of, view_of, sizes, labels, outlines
+
+
+def descriptor_chunks(db: ObjectDatabase, sizes: list[int]) -> Iterator[NDArray[np.uint8]]:
+    """The descriptors, one view at a time (in the order of :func:`read_views`)."""
+    try:
+        rows = db.conn.execute("SELECT v.id, v.descriptors" + _SELECT_VIEWS)
+        for (vid, blob), n in zip(rows, sizes, strict=True):
+            if len(blob) != n * _DIM:
+                raise DatabaseError(db.path, f"view {vid} is corrupt (wrong descriptor BLOB size)")
+            yield np.frombuffer(blob, np.uint8).reshape(n, _DIM)
+    except (sqlite3.DatabaseError, ValueError) as exc:
+        raise DatabaseError(db.path, f"cannot be read (corrupt?): {exc}") from None
+
+
+def index_of(
+    db: ObjectDatabase, gen: int, total: int, sizes: list[int], nprobe: int, seed: int
+) -> DescriptorIndex:
+    """The index of the database's ``index_kind`` over every descriptor (a cached quantiser
+    reused)."""
+    kind = db.index_kind
+    if kind == "auto":
+        kind = _auto_kind(total)
+    if kind == "faiss" and not _have_faiss():
+        raise DatabaseError(
+            db.path, "index 'faiss' needs the faiss-cpu package (pip install faiss-cpu)"
+        )
+    if kind in ("ivf", "faiss"):
+        centroids, cells = cached_quantiser(db.conn, gen, total)
+        cls = IVFIndex if kind == "ivf" else FaissIndex
+        index = cls.from_chunks(
+            lambda: descriptor_chunks(db, sizes),
+            total,
+            nprobe=nprobe,
+            seed=seed,
+            centroids=centroids,
+            cells=cells,
+        )
+        if (centroids is None or index.cache_rejected) and not db.readonly:
+            save_quantiser(db.conn, gen, index)
+        return index
+    desc = np.empty((total, _DIM), np.uint8)
+    s = 0
+    for block in descriptor_chunks(db, sizes):
+        desc[s : s + block.shape[0]] = block
+        s += block.shape[0]
+    return build_index(desc, kind, nprobe=nprobe, seed=seed)
