@@ -18,18 +18,17 @@ sys.path.insert(0, str(ROOT / "benchmarks"))
 limits = pytest.importorskip("architecture_limits", reason="benchmarks/ not beside the tests")
 pytest.importorskip("radon", reason="radon measures the complexity (pip install radon)")
 
-#: How much a known exception may still grow while other issues are landing (they edit these
-#: modules in parallel); new offenders get no slack.
-SLACK = {"lines": 60, "complexity": 2, "parameters": 1}
+#: How much a known exception may still grow: none (a new option of a command is a reason to
+#: raise its entry here, in the same commit).
+SLACK = {"lines": 0, "complexity": 0, "parameters": 0}
 #: (kind, module, name) → the value measured when it was listed.
 KNOWN: dict[tuple[str, str, str], int] = {
-    # a typer command: one parameter per CLI option
+    # Typer commands only: a command's parameters are its declared options (each one an
+    # ``Annotated[..., typer.Option]`` with its help text), i.e. the signature IS the command's
+    # options object; the library functions they call take options dataclasses.
     ("parameters", "cli/describe.py", "describe_cmd"): 25,
-    # not split yet (see the note of issue 9)
-    # landed by other issues during this session (after the limits test): to split
     ("parameters", "cli/annotate.py", "annotate_cmd"): 10,
     ("parameters", "cli/points.py", "points_cmd"): 13,
-    # a typer command: one parameter per CLI option (issue 14: the RGB-D sources added 8)
     ("parameters", "cli/watch.py", "watch_cmd"): 26,
 }
 
