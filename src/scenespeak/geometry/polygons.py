@@ -181,7 +181,8 @@ def intersection_area(
     a_convex: bool | None = None,
     b_convex: bool | None = None,
 ) -> float:
-    """Area of A ∩ B: exact when either polygon is convex, else a 256 x 256 grid estimate.
+    """Area of A ∩ B, exact: convex clipping when either polygon is convex, else
+    :func:`exact_intersection_area` (Green's theorem on the two boundaries).
 
     ``a_convex`` / ``b_convex`` pass :func:`is_convex` of a polygon when it is already known.
     """
@@ -194,18 +195,11 @@ def intersection_area(
             return 0.0
         clipped = _clip_convex(b, a)
     else:
-        from matplotlib.path import Path
-
         lo = np.maximum(a.min(axis=0), b.min(axis=0))
         hi = np.minimum(a.max(axis=0), b.max(axis=0))
         if np.any(hi <= lo):
             return 0.0
-        k = 256
-        xs = lo[0] + (np.arange(k) + 0.5) * (hi[0] - lo[0]) / k
-        ys = lo[1] + (np.arange(k) + 0.5) * (hi[1] - lo[1]) / k
-        pts = np.stack(np.meshgrid(xs, ys), axis=-1).reshape(-1, 2)
-        inside = Path(a).contains_points(pts) & Path(b).contains_points(pts)
-        return float(inside.mean() * np.prod(hi - lo))
+        return exact_intersection_area(_Ring(a), _Ring(b))
     return abs(polygon_area(clipped)) if len(clipped) >= 3 else 0.0
 
 
@@ -384,6 +378,15 @@ def _boundary_part_inside(
     keep = np.where(on_b, same & keep_shared, inside)
     xdy = 0.5 * (a0[:, 0] + a1[:, 0]) * (a1[:, 1] - a0[:, 1])
     return float(np.sum(xdy[keep]))
+
+
+class _Ring:
+    """A polygon's boundary as oriented edges, counter-clockwise (a :class:`Boundary`)."""
+
+    def __init__(self, p: NDArray[np.float64]) -> None:
+        q = np.asarray(p, dtype=np.float64)
+        self.start = q if polygon_area(q) >= 0.0 else q[::-1].copy()
+        self.end = cyclic_next(self.start)
 
 
 def exact_intersection_area(a: Boundary, b: Boundary) -> float:

@@ -43,6 +43,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from scenespeak.contract import SpatialObject
+from scenespeak.geometry.polygons import polygon_area
 
 __all__ = ["MemoryFrame", "MemoryObject", "MemoryOptions", "Sighting", "WorkingMemory"]
 
@@ -187,8 +188,7 @@ def _centre(hull: NDArray[np.float64]) -> NDArray[np.float64]:
 
 
 def _area(hull: NDArray[np.float64]) -> float:
-    x, y = hull[:, 0], hull[:, 1]
-    return 0.5 * abs(float(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1))))
+    return abs(polygon_area(np.asarray(hull, dtype=np.float64)))
 
 
 class WorkingMemory:

@@ -97,9 +97,11 @@ def _grid_inside(poly: Sequence[Sequence[float]], n: int) -> Any:
     """About ``n`` points of a regular grid inside the polygon (even-odd rule), as (k, 2)."""
     import numpy as np
 
+    from scenespeak.geometry.polygons import polygon_area
+
     p = np.asarray(poly, dtype=np.float64)
     x, y = p[:, 0], p[:, 1]
-    area = 0.5 * abs(float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y)))
+    area = abs(polygon_area(p))
     lo, hi = p.min(axis=0), p.max(axis=0)
     if area <= 0.0:
         return p.mean(axis=0, keepdims=True)
