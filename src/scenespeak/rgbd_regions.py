@@ -146,20 +146,23 @@ def database_objects(
 
     t0 = time.perf_counter()
     feats = detect(to_gray(np.asarray(color)), precise_upscale=False)
-    labelling = db.label(feats, ratio=0.8, min_inliers=8, min_inliers_small=4, small_area=8000.0)
+    # the stereo pipeline's labelling (its LabelOptions, several instances of a label, the
+    # finer search for small far objects in the image), so both paths recognise alike
+    labelling = db.label(feats, image=np.asarray(color))
     timings["label"] = time.perf_counter() - t0
     shape = depth.shape
-    masks = {det.label: _outline_mask(det.outline_in_scene, shape) for det in labelling.detections}
-    near = {
-        name: float(np.nanmedian(depth[m])) if np.isfinite(depth[m]).any() else np.inf
-        for name, m in masks.items()
-    }
+    found = [
+        (det.label, _outline_mask(det.outline_in_scene, shape)) for det in labelling.detections
+    ]
+    near = [
+        float(np.nanmedian(depth[m])) if np.isfinite(depth[m]).any() else np.inf for _, m in found
+    ]
     out: list[MeasuredObject | Skipped] = []
-    for name, m in masks.items():
+    for k, (name, m) in enumerate(found):
         visible = m.copy()
-        for other, z in near.items():
-            if other != name and z < near[name]:
-                visible &= ~masks[other]
+        for j, (_, other) in enumerate(found):
+            if j != k and near[j] < near[k]:
+                visible &= ~other
         ys, xs = np.nonzero(visible)
         if len(ys) == 0:
             out.append(Skipped(name, "recognised, but its outline is hidden by nearer objects"))
