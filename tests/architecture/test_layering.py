@@ -17,7 +17,7 @@ import pytest
 SRC = Path(__file__).resolve().parents[2] / "src" / "scenespeak"
 
 #: Leaf modules every room may use: errors, safe reading and text cleaning, size limits.
-BASE = {"errors", "cleantext", "safeio", "safetext", "limits"}
+BASE = {"errors", "cleantext", "safeio", "safetext", "limits", "overrides"}
 #: The composition layer: the pipelines and the input readers that feed them.
 COMPOSE = {
     "pipeline",

@@ -31,7 +31,7 @@ True
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field, fields, replace
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -52,6 +52,7 @@ from scenespeak.geometry.frames import (
     plane_basis,
     project_to_plane,
 )
+from scenespeak.overrides import replace_fields
 
 __all__ = [
     "DEFAULT_UP",
@@ -215,14 +216,11 @@ class ObjectOptions:
         cls, options: ObjectOptions | None, overrides: Mapping[str, object]
     ) -> ObjectOptions:
         """``options`` (or the defaults) with single fields replaced (unknown names refused)."""
-        base = options if options is not None else cls()
-        if not overrides:
-            return base
-        names = {f.name for f in fields(cls)}
-        unknown = sorted(set(overrides) - names)
-        if unknown:
-            raise TypeError(f"unknown object options {unknown}; the fields are {sorted(names)}")
-        return replace(base, **overrides)  # type: ignore[arg-type]
+        return replace_fields(
+            options if options is not None else cls(),
+            overrides,
+            lambda bad, names: TypeError(f"unknown object options {bad}; the fields are {names}"),
+        )
 
 
 @dataclass(frozen=True)

@@ -24,12 +24,13 @@ import math
 import tempfile
 import time
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, fields, replace
+from dataclasses import dataclass
 from os import PathLike
 from pathlib import Path
 from typing import Any
 
 from scenespeak.errors import InputError, ScenespeakError
+from scenespeak.overrides import replace_fields
 from scenespeak.tools.engine import DatabaseHandle, EngineOptions, run_batches
 from scenespeak.tools.output import ResumableJsonl, SceneRecord, log_path, write_parquet
 
@@ -172,11 +173,11 @@ class AnnotateOptions:
         cls, options: AnnotateOptions | None, overrides: Mapping[str, object]
     ) -> AnnotateOptions:
         """``options`` (or the defaults) with single fields replaced (unknown names refused)."""
-        base = options if options is not None else cls()
-        unknown = sorted(set(overrides) - {f.name for f in fields(cls)})
-        if unknown:
-            raise TypeError(f"annotate() got unexpected keyword argument(s) {unknown}")
-        return replace(base, **overrides) if overrides else base  # type: ignore[arg-type]
+        return replace_fields(
+            options if options is not None else cls(),
+            overrides,
+            lambda bad, _names: TypeError(f"annotate() got unexpected keyword argument(s) {bad}"),
+        )
 
 
 @dataclass(frozen=True)

@@ -7,12 +7,13 @@ format and the ground-truth rule are in ``docs/scenes.md``.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass, fields, replace
-from typing import Any, Literal, TypeVar, cast
+from dataclasses import dataclass
+from typing import Any, Literal, TypeVar
 
 import numpy as np
 from numpy.typing import NDArray
 
+from scenespeak.overrides import replace_fields
 from scenespeak.tools.render import (
     Camera,
     MeshSpec,
@@ -238,8 +239,8 @@ _Options = TypeVar("_Options", SceneOptions, DatasetOptions)
 
 def with_overrides(options: _Options, overrides: dict[str, object], what: str) -> _Options:
     """``options`` with single fields replaced; an unknown name is refused like a keyword."""
-    names = {f.name for f in fields(options)}
-    unknown = sorted(set(overrides) - names)
-    if unknown:
-        raise TypeError(f"{what}() got unexpected keyword argument(s) {unknown}")
-    return replace(options, **cast(Any, overrides)) if overrides else options
+    return replace_fields(
+        options,
+        overrides,
+        lambda bad, _names: TypeError(f"{what}() got unexpected keyword argument(s) {bad}"),
+    )

@@ -3,9 +3,10 @@
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass, fields, replace
+from dataclasses import dataclass
 
 from scenespeak.errors import InputError
+from scenespeak.overrides import replace_fields
 
 __all__ = ["LabelOptions"]
 
@@ -106,13 +107,10 @@ class LabelOptions:
         >>> LabelOptions.with_overrides(None, {"min_inliers": 5}).min_inliers
         5
         """
-        base = options if options is not None else cls()
-        if not overrides:
-            return base
-        names = {f.name for f in fields(cls)}
-        unknown = sorted(set(overrides) - names)
-        if unknown:
-            raise InputError(
-                "label options", f"unknown {', '.join(unknown)}; the fields are {sorted(names)}"
-            )
-        return replace(base, **overrides)  # type: ignore[arg-type]
+        return replace_fields(
+            options if options is not None else cls(),
+            overrides,
+            lambda bad, names: InputError(
+                "label options", f"unknown {', '.join(bad)}; the fields are {names}"
+            ),
+        )

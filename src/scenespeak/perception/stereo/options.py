@@ -11,8 +11,10 @@ cropped dense map with :data:`~scenespeak.perception.stage_options.DENSE_MARGIN`
 from __future__ import annotations
 
 from collections.abc import Mapping
-from dataclasses import dataclass, fields, replace
+from dataclasses import dataclass
 from typing import Literal, TypeVar
+
+from scenespeak.overrides import replace_fields
 
 __all__ = ["PLAIN_DENSE_MARGIN", "DenseOptions", "MatchOptions", "PointsOptions"]
 
@@ -28,16 +30,13 @@ _O = TypeVar("_O", "MatchOptions", "DenseOptions", "PointsOptions")
 
 def _with_overrides(cls: type[_O], options: _O | None, overrides: Mapping[str, object]) -> _O:
     """``options`` (or the defaults) with single fields replaced (unknown names refused)."""
-    base = options if options is not None else cls()
-    if not overrides:
-        return base
-    names = {f.name for f in fields(cls)}
-    unknown = sorted(set(overrides) - names)
-    if unknown:
-        raise TypeError(
-            f"unknown {cls.__name__} keywords {unknown}; the fields are {sorted(names)}"
-        )
-    return replace(base, **overrides)  # type: ignore[arg-type]
+    return replace_fields(
+        options if options is not None else cls(),
+        overrides,
+        lambda bad, names: TypeError(
+            f"unknown {cls.__name__} keywords {bad}; the fields are {names}"
+        ),
+    )
 
 
 @dataclass(frozen=True)

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, fields, replace
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -11,6 +11,7 @@ from matplotlib.colors import to_rgba
 from numpy.typing import ArrayLike, NDArray
 
 from scenespeak.errors import InputError
+from scenespeak.overrides import replace_fields
 
 #: Colour of points that belong to no known object.
 UNLABELLED_COLOR: tuple[float, float, float, float] = (0.55, 0.55, 0.55, 1.0)
@@ -152,8 +153,8 @@ class FigureStyle:
         cls, style: FigureStyle | None, overrides: Mapping[str, object], what: str
     ) -> FigureStyle:
         """``style`` (or the defaults) with single fields replaced (unknown names refused)."""
-        base = style if style is not None else cls()
-        unknown = sorted(set(overrides) - {f.name for f in fields(cls)})
-        if unknown:
-            raise TypeError(f"{what}() got unexpected keyword argument(s) {unknown}")
-        return replace(base, **overrides) if overrides else base  # type: ignore[arg-type]
+        return replace_fields(
+            style if style is not None else cls(),
+            overrides,
+            lambda bad, _names: TypeError(f"{what}() got unexpected keyword argument(s) {bad}"),
+        )
