@@ -235,6 +235,30 @@ def test_relate_objects_on_other_directions_and_thresholds(directions: int) -> N
             assert_same(got, expected)
 
 
+def test_labels_with_percent_signs_and_braces_are_said_as_given() -> None:
+    """The sentences are filled through ``%`` patterns (``relate._printf``): labels that hold
+    ``%s``, ``%`` or braces are said as given, as ``str.format`` says them, and a pattern
+    that names the referent twice ("but extends ... relative to the {referent}") is filled
+    twice."""
+    index = next(
+        k
+        for k in range(len(LAYOUTS))
+        if any(
+            rel.secondary_hedge == "extends"
+            for rel, _ in language.relate_objects(
+                layout_scene(k)[0], names=layout_scene(k)[1], heights=layout_scene(k)[2]
+            )
+        )
+    )
+    hulls, _, heights = layout_scene(index)
+    names = [f"thing %s {{0}} {k}%" for k in range(len(hulls))]
+    got = language.relate_objects(hulls, names=names, heights=heights)
+    assert_same(got, reference(hulls, names, heights))
+    extends = [rel for rel, _ in got if rel.secondary_hedge == "extends"]
+    assert extends and all(rel.horizontal_sentence.count(rel.referent) == 2 for rel in extends)
+    assert relate_module._printf("The {referent} is under the {argument}.") is None
+
+
 def test_results_are_ordinary_relations() -> None:
     """The relations built through ``__dict__`` behave like ``Relation(...)``."""
     sq = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])

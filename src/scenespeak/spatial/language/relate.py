@@ -269,7 +269,9 @@ def _build(
     The objects are the ones ``Relation(...)`` and ``PairHistograms(...)`` make (the same
     fields, in the same order); they are filled through ``__dict__`` because a frozen
     dataclass' ``__init__`` sets each of its 23 fields through ``object.__setattr__``, which
-    would cost more than the rule base itself.
+    would cost more than the rule base itself. Row ``k`` (the pair) and row ``k + P`` (the
+    same pair the other way round) are built in the same step: their dicts hold the same
+    floats, turned (B's left is A's right).
     """
     (arguments, referents), (kinds, primaries, secondaries, hedges, sec_hedges), verticals = words[
         :3
@@ -277,66 +279,141 @@ def _build(
     hybrids = words[3]
     shared, own = numbers
     f0s, f2s = histograms
-    horizontal_templates, vertical_templates = templates
+    horizontals, sentences = _sentences(arguments, referents, verticals, templates)
     p = len(shared)
     new = object.__new__
     out: list[tuple[Relation, PairHistograms]] = [None] * (2 * p)  # type: ignore[list-item]
-    for k in range(p):
-        v, hybrid = shared[k], hybrids[k]
-        # The reversed pair's dicts hold the same floats, turned (B's left is A's right).
-        for r, back in ((k, False), (k + p, True)):
-            argument, referent, vertical = arguments[r], referents[r], verticals[r]
-            horizontal = horizontal_templates[r].format(argument=argument, referent=referent)
-            sentence = (
-                horizontal
-                if vertical is None
-                else vertical_templates[vertical].format(argument=argument, referent=referent)
-            )
-            x = own[r]
-            rel = new(Relation)
-            rel.__dict__.update(
-                argument=argument,
-                referent=referent,
-                primary=primaries[r],
-                secondary=secondaries[r],
-                hedge=hedges[r],
-                sentence=sentence,
-                confidence=x[0],
-                secondary_hedge=sec_hedges[r],
-                kind=kinds[r],
-                horizontal_sentence=horizontal,
-                degrees0=_four(v, 0, back),
-                degrees2=_four(v, 4, back),
-                degrees=_four(v, 8, back),
-                deviation0=_four(v, 12, back),
-                deviation2=_four(v, 16, back),
-                deviation=x[1],
-                coverage=v[20],
-                extends_share=x[2],
-                overlap=v[22] if back else v[21],
-                referent_overlap=v[21] if back else v[22],
-                vertical=vertical,
-                hybrid=hybrid,
-                frame="object",
-            )
-            hist = new(PairHistograms)
-            hist.__dict__.update(
-                f0=f0s[r],
-                f2=f2s[r],
-                hybrid=hybrid,
-                intersection=v[23],
-                area_a=v[25] if back else v[24],
-                area_b=v[24] if back else v[25],
-            )
-            out[places[back][k]] = (rel, hist)
+    for k, v, hybrid, here, there in zip(range(p), shared, hybrids, *places, strict=True):
+        (d0r, d0b, d0l, d0f, d2r, d2b, d2l, d2f, dr, db, dl, df) = v[:12]
+        (e0r, e0b, e0l, e0f, e2r, e2b, e2l, e2f, coverage, ov, rov, inter, aa, ab) = v[12:]
+        x = own[k]
+        rel = new(Relation)
+        rel.__dict__.update(
+            argument=arguments[k],
+            referent=referents[k],
+            primary=primaries[k],
+            secondary=secondaries[k],
+            hedge=hedges[k],
+            sentence=sentences[k],
+            confidence=x[0],
+            secondary_hedge=sec_hedges[k],
+            kind=kinds[k],
+            horizontal_sentence=horizontals[k],
+            degrees0={"right": d0r, "behind": d0b, "left": d0l, "front": d0f},
+            degrees2={"right": d2r, "behind": d2b, "left": d2l, "front": d2f},
+            degrees={"right": dr, "behind": db, "left": dl, "front": df},
+            deviation0={"right": e0r, "behind": e0b, "left": e0l, "front": e0f},
+            deviation2={"right": e2r, "behind": e2b, "left": e2l, "front": e2f},
+            deviation=x[1],
+            coverage=coverage,
+            extends_share=x[2],
+            overlap=ov,
+            referent_overlap=rov,
+            vertical=verticals[k],
+            hybrid=hybrid,
+            frame="object",
+        )
+        hist = new(PairHistograms)
+        hist.__dict__.update(
+            f0=f0s[k], f2=f2s[k], hybrid=hybrid, intersection=inter, area_a=aa, area_b=ab
+        )
+        out[here] = (rel, hist)
+        r = k + p
+        x = own[r]
+        rel = new(Relation)
+        rel.__dict__.update(
+            argument=arguments[r],
+            referent=referents[r],
+            primary=primaries[r],
+            secondary=secondaries[r],
+            hedge=hedges[r],
+            sentence=sentences[r],
+            confidence=x[0],
+            secondary_hedge=sec_hedges[r],
+            kind=kinds[r],
+            horizontal_sentence=horizontals[r],
+            degrees0={"right": d0l, "behind": d0f, "left": d0r, "front": d0b},
+            degrees2={"right": d2l, "behind": d2f, "left": d2r, "front": d2b},
+            degrees={"right": dl, "behind": df, "left": dr, "front": db},
+            deviation0={"right": e0l, "behind": e0f, "left": e0r, "front": e0b},
+            deviation2={"right": e2l, "behind": e2f, "left": e2r, "front": e2b},
+            deviation=x[1],
+            coverage=coverage,
+            extends_share=x[2],
+            overlap=rov,
+            referent_overlap=ov,
+            vertical=verticals[r],
+            hybrid=hybrid,
+            frame="object",
+        )
+        hist = new(PairHistograms)
+        hist.__dict__.update(
+            f0=f0s[r], f2=f2s[r], hybrid=hybrid, intersection=inter, area_a=ab, area_b=aa
+        )
+        out[there] = (rel, hist)
     return out
 
 
-def _four(v: list[float], at: int, back: bool) -> dict[str, float]:
-    """The four directions' values ``v[at:at + 4]`` as a dict, turned for the reversed pair."""
-    if back:
-        return {"right": v[at + 2], "behind": v[at + 3], "left": v[at], "front": v[at + 1]}
-    return {"right": v[at], "behind": v[at + 1], "left": v[at + 2], "front": v[at + 3]}
+def _sentences(
+    arguments: list[str],
+    referents: list[str],
+    verticals: list[str | None],
+    templates: tuple[list[str], dict[str, str]],
+) -> tuple[list[str], list[str]]:
+    """Every row's horizontal sentence and the sentence it says (the vertical one where it
+    has one): the templates filled with the row's labels, the strings that
+    ``template.format(argument=..., referent=...)`` gives (through :func:`_printf`)."""
+    horizontal_templates, vertical_templates = templates
+    patterns = {t: _printf(t) for t in set(horizontal_templates)}
+    horizontal = [
+        _fill(t, patterns[t], a, r)
+        for t, a, r in zip(horizontal_templates, arguments, referents, strict=True)
+    ]
+    if all(v is None for v in verticals):
+        return horizontal, horizontal
+    said = list(horizontal)
+    for r, word in enumerate(verticals):
+        if word is not None:
+            said[r] = vertical_templates[word].format(argument=arguments[r], referent=referents[r])
+    return horizontal, said
+
+
+def _fill(template: str, pattern: tuple[str, int] | None, argument: str, referent: str) -> str:
+    """``template.format(argument=argument, referent=referent)``, through its ``%`` pattern
+    where it has one (:func:`_printf`)."""
+    if pattern is None:
+        return template.format(argument=argument, referent=referent)
+    text, fields = pattern
+    if fields == 2:
+        return text % (argument, referent)
+    return text % (argument, referent, referent)
+
+
+def _printf(template: str) -> tuple[str, int] | None:
+    """``template`` (with ``{argument}`` and ``{referent}``) as a ``%`` pattern and its number
+    of fields: ``pattern % (argument, referent)`` (2) or ``% (argument, referent, referent)``
+    (3) is the string ``template.format(...)`` gives, several times faster than ``format``
+    with keywords. None for any other order of the fields (``format`` then fills it).
+
+    Examples
+    --------
+    >>> _printf("The {argument} is 5% left of the {referent}.")
+    ('The %s is 5%% left of the %s.', 2)
+    >>> _printf("The {referent} is under the {argument}.") is None
+    True
+    """
+    import string
+
+    fields = tuple(name for _, name, _, _ in string.Formatter().parse(template) if name is not None)
+    if fields not in (("argument", "referent"), ("argument", "referent", "referent")):
+        return None
+    if any(spec or conv for _, name, spec, conv in string.Formatter().parse(template) if name):
+        return None
+    parts = [
+        text.replace("%", "%%") + ("%s" if name is not None else "")
+        for text, name, _, _ in string.Formatter().parse(template)
+    ]
+    return "".join(parts), len(fields)
 
 
 def relate(
