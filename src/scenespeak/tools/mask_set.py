@@ -218,16 +218,29 @@ def _pair(rng: np.random.Generator, kind: str, size: int, name: str) -> MaskPair
     return MaskPair(name, kind, size, a, b, pa, pb, measured)
 
 
+def digest(pairs: list[MaskPair]) -> str:
+    """SHA-256 of the pairs' names and mask bits: pins the frozen set (tests, docs)."""
+    import hashlib
+
+    h = hashlib.sha256()
+    for pair in pairs:
+        h.update(pair.name.encode())
+        h.update(np.packbits(pair.a).tobytes())
+        h.update(np.packbits(pair.b).tobytes())
+    return h.hexdigest()
+
+
 def mask_pairs(seed: int, *, sizes: tuple[int, ...] = SIZES, per_kind: int = 3) -> list[MaskPair]:
     """The frozen set: ``per_kind`` disjoint pairs of each kind at each size, from ``seed``.
 
-    Deterministic: the same arguments give the same masks (attempts that overlap, touch or
-    leave the image are redrawn from the same generator).
+    Deterministic, and each ``(size, kind)`` has its own generator (seeded by ``seed``, the
+    size and the kind's index), so a subset of sizes holds the same pairs as the whole set;
+    attempts that overlap, touch or leave the image are redrawn from that generator.
     """
-    rng = np.random.default_rng(seed)
     out: list[MaskPair] = []
     for size in sizes:
-        for kind in KINDS:
+        for k, kind in enumerate(KINDS):
+            rng = np.random.default_rng([seed, size, k])
             made = 0
             while made < per_kind:
                 pair = _pair(rng, kind, size, f"{kind}-{size}-{made}")
