@@ -160,6 +160,20 @@ def links_loop(padded: np.ndarray, segments: np.ndarray) -> np.ndarray:
     return links
 
 
+def ring_table(padded: NDArray[np.bool_]) -> tuple[NDArray[np.float64], IntArray]:
+    """The outline of ``padded`` (False all round): ``(points, ring_start)`` as
+    :func:`follow_rings` gives them (compiled once the kernel is loaded, else NumPy)."""
+    from scenespeak.spatial.forces import _jit
+
+    if _jit.loaded():
+        from scenespeak.spatial.forces import _shapes
+
+        links = _shapes.trace_links(np.ascontiguousarray(padded, dtype=np.bool_), _SEGMENTS)
+        points, starts = _shapes.trace_rings(links, padded.shape[1], padded.shape[0])
+        return points, starts
+    return _follow_numpy(crack_links(padded), padded.shape[1], padded.shape[0])
+
+
 def rings(padded: NDArray[np.bool_]) -> list[NDArray[np.float64]]:
     """The outline of ``padded`` (False all round) as rings of ``(row, col)`` points.
 
@@ -170,13 +184,5 @@ def rings(padded: NDArray[np.bool_]) -> list[NDArray[np.float64]]:
     >>> [ring.tolist() for ring in rings(m)]   # crack midpoints, inside on the left
     [[[1.0, 0.5], [2.0, 0.5], [2.5, 1.0], [2.0, 1.5], [1.0, 1.5], [0.5, 1.0]]]
     """
-    from scenespeak.spatial.forces import _jit
-
-    if _jit.loaded():
-        from scenespeak.spatial.forces import _shapes
-
-        links = _shapes.trace_links(np.ascontiguousarray(padded, dtype=np.bool_), _SEGMENTS)
-        points, starts = _shapes.trace_rings(links, padded.shape[1], padded.shape[0])
-    else:
-        points, starts = _follow_numpy(crack_links(padded), padded.shape[1], padded.shape[0])
+    points, starts = ring_table(padded)
     return [points[starts[k] : starts[k + 1]] for k in range(len(starts) - 1)]

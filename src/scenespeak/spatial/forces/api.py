@@ -19,7 +19,7 @@ from scenespeak.errors import InputError
 from scenespeak.spatial.forces import guards
 from scenespeak.spatial.forces.contact import _contact
 from scenespeak.spatial.forces.kernel import KernelSpec, sweep_pairs
-from scenespeak.spatial.forces.regions import MASK_TOLERANCE as _MASK_TOLERANCE
+from scenespeak.spatial.forces.regions import DEFAULT_MASK_TOLERANCE as _MASK_TOLERANCE
 from scenespeak.spatial.forces.regions import Region, _region
 
 FloatArray = NDArray[np.float64]
@@ -87,9 +87,10 @@ def force_histogram(
         the objects do not overlap; any ``r`` if they do not touch).
     directions : int, default 180
         Number of directions; ``h[k]`` is the value at angle ``2*pi*k/directions``.
-    mask_tolerance : float, default 0.25
+    mask_tolerance : float or None, default None
         For masks: the traced outline is simplified to within this many pixels (0 keeps every
-        marching-squares vertex).
+        marching-squares vertex); ``None`` chooses it per ring by the measured rule of
+        :func:`scenespeak.spatial.forces.masks.outline_tolerance` (``docs/forces.md``).
 
     Returns
     -------
@@ -160,7 +161,7 @@ def force_histograms(
         The exponents; every one must be defined for this pair.
     directions : int, default 180
         Number of directions; ``h[i, k]`` is the value for ``r[i]`` at ``2*pi*k/directions``.
-    mask_tolerance : float, default 0.25
+    mask_tolerance : float or None, default None
         As for :func:`force_histogram`.
 
     Returns
@@ -214,7 +215,7 @@ def hybrid_histogram(
         Positive factors of ``Y0`` (Matsakis' defaults 0.01 and 3).
     directions : int, default 180
         Number of directions; ``h[k]`` is the value at angle ``2*pi*k/directions``.
-    mask_tolerance : float, default 0.25
+    mask_tolerance : float or None, default None
         As for :func:`force_histogram`.
 
     Returns

@@ -28,8 +28,11 @@ FloatArray = NDArray[np.float64]
 # Relative tolerances, scaled by the objects' size (lengths) or size squared (areas).
 _LENGTH_TOL = 1e-10
 _AREA_TOL = 1e-10
-#: Default simplification of traced mask outlines, in pixels (see ``masks.py``).
+#: Simplification of traced mask outlines that keeps every corner of a pixel staircase, in
+#: pixels: the floor of the measured rule (``masks.outline_tolerance``).
 MASK_TOLERANCE = 0.25
+#: The default ``mask_tolerance``: None, i.e. chosen per ring by ``masks.outline_tolerance``.
+DEFAULT_MASK_TOLERANCE: float | None = None
 
 _next = cyclic_next
 _shoelace = polygon_area
@@ -191,7 +194,10 @@ def _region(obj: ArrayLike, name: str, mask_tolerance: float | None) -> Region:
 
 
 def prepare(
-    obj: ArrayLike, name: str = "object", *, mask_tolerance: float | None = MASK_TOLERANCE
+    obj: ArrayLike,
+    name: str = "object",
+    *,
+    mask_tolerance: float | None = DEFAULT_MASK_TOLERANCE,
 ) -> Region:
     """Validate an object once for many force histograms: a polygon or a boolean mask.
 
@@ -202,9 +208,10 @@ def prepare(
         mask (``(row, col)`` → ``(x, y) = (col, -row)``).
     name : str
         Named in error messages.
-    mask_tolerance : float or None, default 0.25
-        For masks: simplification of the traced outline, in pixels (``None``: chosen by the
-        measured rule of :func:`scenespeak.spatial.forces.masks.outline_tolerance`).
+    mask_tolerance : float or None, default None
+        For masks: simplification of the traced outline, in pixels (0 keeps every
+        marching-squares vertex); ``None`` chooses it per ring by the measured rule of
+        :func:`scenespeak.spatial.forces.masks.outline_tolerance` (0.25, 0.5 or 1 px).
 
     Returns
     -------
