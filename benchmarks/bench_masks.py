@@ -101,8 +101,18 @@ def evaluate(pair: MaskPair, settings: list[str], repeat: int) -> list[Row]:
             err_p = (peak_error(got[0], poly[0]), peak_error(got[1], poly[1]))
         ms = ms_exact if setting == "0" else cpu_ms(lambda t=tol: _hist(pair.a, pair.b, t), repeat)
         rows.append(
-            Row(pair.name, pair.kind, pair.size, pair.gap, setting, _vertices(pair, tol), err_e,
-                err_p, ms, ms_exact)
+            Row(
+                pair.name,
+                pair.kind,
+                pair.size,
+                pair.gap,
+                setting,
+                _vertices(pair, tol),
+                err_e,
+                err_p,
+                ms,
+                ms_exact,
+            )
         )
     return rows
 
@@ -113,8 +123,10 @@ def _fmt(x: float) -> str:
 
 def summary(rows: list[Row], settings: list[str]) -> None:
     """Per setting and image size: the max errors and the median speed-up over ``0``."""
-    print("| setting | size | pairs | max err F0 / F2 vs exact outline | "
-          "max err F0 / F2 vs polygon (0 → setting) | vertices | speed-up (median) |")
+    print(
+        "| setting | size | pairs | max err F0 / F2 vs exact outline | "
+        "max err F0 / F2 vs polygon (0 → setting) | vertices | speed-up (median) |"
+    )
     print("| --- | ---: | ---: | ---: | ---: | ---: | ---: |")
     sizes = sorted({r.size for r in rows})
     for setting in settings:
@@ -134,8 +146,10 @@ def summary(rows: list[Row], settings: list[str]) -> None:
             verts = sum(r.vertices for r in sel) / max(1, sum(base[r.pair].vertices for r in sel))
             speed = statistics.median(r.ms_exact / r.ms for r in sel)
             label = "all" if size == 0 else f"{size}²"
-            print(f"| {setting} | {label} | {len(sel)} | {_fmt(e0)} / {_fmt(e2)} | {p_txt} | "
-                  f"{100 * verts:.0f} % | {speed:.2f}× |")
+            print(
+                f"| {setting} | {label} | {len(sel)} | {_fmt(e0)} / {_fmt(e2)} | {p_txt} | "
+                f"{100 * verts:.0f} % | {speed:.2f}× |"
+            )
 
 
 def main() -> None:

@@ -48,6 +48,11 @@ RULE: tuple[tuple[float, float, float], ...] = (
 )
 
 
+#: A vertex moved back (:func:`_offset_vertices`) moves at most this many tolerances (so the
+#: outline stays within twice the tolerance of the traced one).
+SHIFT_LIMIT = 1.0
+
+
 def outline_tolerance(area: float, perimeter: float) -> float:
     """The simplification (pixels) of one traced ring when ``mask_tolerance`` is None.
 
@@ -97,14 +102,20 @@ def _ring_tolerance(ring: FloatArray) -> float:
     return outline_tolerance(area, perimeter)
 
 
+def _douglas_peucker(ring: FloatArray, tolerance: float) -> FloatArray:
+    """The vertices Douglas-Peucker keeps of the closed ``ring`` (OpenCV, in its order)."""
+    import cv2
+
+    # Marching-squares vertices sit on the half-pixel grid: exact in float32.
+    kept = cv2.approxPolyDP(ring.astype(np.float32)[:, None, :], tolerance, True)
+    return np.asarray(kept[:, 0, :], dtype=np.float64)
+
+
 def _kept_indices(ring: FloatArray, tolerance: float) -> IntArray | None:
     """Douglas-Peucker on ``ring``: the indices of the vertices it keeps, in ring order
     (None when fewer than 3 are kept or the order cannot be recovered)."""
-    import cv2
-
-    # Marching-squares vertices sit on the half-pixel grid: exact in float32, and each
-    # crack midpoint is visited once, so a kept point names its index.
-    kept = cv2.approxPolyDP(ring.astype(np.float32)[:, None, :], tolerance, True)[:, 0, :]
+    # Each crack midpoint is visited once, so a kept point names its index.
+    kept = _douglas_peucker(ring, tolerance)
     if len(kept) < 3:
         return None
     width = int(4 * ring[:, 1].max()) + 1
@@ -115,7 +126,7 @@ def _kept_indices(ring: FloatArray, tolerance: float) -> IntArray | None:
 
     keys = key(ring)
     order = np.argsort(keys)
-    idx = np.roll(order[np.searchsorted(keys[order], key(kept))], 0)
+    idx = order[np.searchsorted(keys[order], key(kept))]
     idx = np.roll(idx, -int(np.argmin(idx)))
     if np.any(np.diff(idx) <= 0):
         return None
@@ -130,7 +141,8 @@ def _offset_vertices(ring: FloatArray, idx: IntArray, tolerance: float) -> Float
     and moves the outline towards its neighbours. Here each chord is shifted along its
     normal by ``δ_k = -(signed area between run and chord) / length``, which gives the run's
     area back, and each vertex is put where its two shifted chords meet (their mean shift
-    where they are within ~12° of parallel), at most ``tolerance`` from where it was.
+    where they are within ~12° of parallel), at most ``SHIFT_LIMIT * tolerance`` from where
+    it was.
     """
     n, m = len(ring), len(idx)
     a = ring[idx]
@@ -155,20 +167,28 @@ def _offset_vertices(ring: FloatArray, idx: IntArray, tolerance: float) -> Float
         0.5 * (d1[:, None] * n1 + d2[:, None] * n2),
     )
     norm = np.hypot(shift[:, 0], shift[:, 1])
-    shift *= np.minimum(1.0, tolerance / np.maximum(norm, 1e-300))[:, None]
+    limit = SHIFT_LIMIT * tolerance
+    far = norm > limit
+    shift[far] *= (limit / norm[far])[:, None]
     return a + shift
 
 
 def _simplified(ring: FloatArray, tolerance: float | None) -> FloatArray:
     """One traced ring simplified (``None``: the ring's rule): Douglas-Peucker to within the
-    tolerance, then the kept vertices moved by :func:`_offset_vertices`."""
+    tolerance, then (above ``MASK_TOLERANCE``) the kept vertices moved by
+    :func:`_offset_vertices`."""
     if len(ring) <= 4:
         return ring
     tol = _ring_tolerance(ring) if tolerance is None else tolerance
     if tol <= 0.0:
         return ring
+    if tol <= MASK_TOLERANCE:
+        # Within 0.25 px every run is a straight line of crack midpoints (no area to give
+        # back): Douglas-Peucker's own vertices, as before the rule.
+        kept = _douglas_peucker(ring, tol)
+        return ring if len(kept) < 3 else kept  # keep a tiny ring as traced
     idx = _kept_indices(ring, tol)
-    if idx is None:  # keep the (tiny) ring as traced
+    if idx is None:
         return ring
     return _offset_vertices(ring, idx, tol)
 
