@@ -120,7 +120,7 @@ def masks() -> tuple[NDArray[np.bool_], NDArray[np.bool_]]:
     return a, b
 
 
-def polygon_vertices(mask: NDArray[np.bool_], tolerance: float) -> int:
+def polygon_vertices(mask: NDArray[np.bool_], tolerance: float | None) -> int:
     """Number of outline vertices a mask is traced into (private helper, for the table)."""
     from scenespeak.spatial.forces import prepare
 
@@ -291,10 +291,11 @@ def main() -> None:
             mw_table(args.mw, rep_big)
         return
 
-    print("\nMasks: outline simplification (mask_tolerance, pixels) vs time, F0+F2 two calls:\n")
+    print("\nMasks: outline simplification (mask_tolerance, pixels) vs time, F0+F2 two calls")
+    print("(None: the measured per-ring rule, the default; see benchmarks/bench_masks.py):\n")
     print("| mask_tolerance | vertices (A + B) | F0+F2 |")
     print("| ---: | ---: | ---: |")
-    for tol in (0.0, 0.25, 0.5, 1.0):
+    for tol in (0.0, 0.25, 0.5, 1.0, None):
         verts = polygon_vertices(ma, tol) + polygon_vertices(mb, tol)
         t = median_ms(
             lambda tol=tol: (
