@@ -28,7 +28,6 @@ KNOWN: dict[tuple[str, str, str], int] = {
     # options object; the library functions they call take options dataclasses.
     ("parameters", "cli/describe.py", "describe_cmd"): 25,
     ("parameters", "cli/annotate.py", "annotate_cmd"): 10,
-    ("parameters", "cli/points.py", "points_cmd"): 13,
     ("parameters", "cli/watch.py", "watch_cmd"): 26,
 }
 

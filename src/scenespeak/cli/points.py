@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -25,63 +26,73 @@ from scenespeak.cli._app import (
     _write_text,
     app,
 )
+from scenespeak.cli._options import takes_options
 from scenespeak.errors import InputError
 
 
-@app.command("points")
-def points_cmd(
-    left: Annotated[Path, typer.Argument(help="Left image.")],
-    right: Annotated[Path, typer.Argument(help="Right image.")],
-    calib: CalibOpt,
-    calib_right: CalibRightOpt = None,
-    fmt: Annotated[PointsFormat, typer.Option("--format", help="json or ply.")] = (
-        PointsFormat.json
-    ),
-    out: Annotated[Path | None, typer.Option("--out", help="Write here, not stdout.")] = None,
+@dataclass(frozen=True, kw_only=True)
+class PointsCommand:
+    """The command line of ``scenespeak points`` (see :mod:`scenespeak.cli._options`)."""
+
+    left: Annotated[Path, typer.Argument(help="Left image.")]
+    right: Annotated[Path, typer.Argument(help="Right image.")]
+    calib: CalibOpt
+    calib_right: CalibRightOpt = None
+    fmt: Annotated[PointsFormat, typer.Option("--format", help="json or ply.")] = PointsFormat.json
+    out: Annotated[Path | None, typer.Option("--out", help="Write here, not stdout.")] = None
     ratio: Annotated[
         float,
         typer.Option(help="Lowe's ratio test threshold, in (0, 1].", callback=_check_ratio),
-    ] = 0.6,
-    image_size: ImageSizeOpt = None,
-    units: UnitsOpt = "m",
-    up: UpOpt = None,
-    pitch: PitchOpt = None,
-    swap: SwapOpt = False,
-    quiet: QuietOpt = False,
-) -> None:
+    ] = 0.6
+    image_size: ImageSizeOpt = None
+    units: UnitsOpt = "m"
+    up: UpOpt = None
+    pitch: PitchOpt = None
+    swap: SwapOpt = False
+    quiet: QuietOpt = False
+
+
+@app.command("points")
+@takes_options(PointsCommand)
+def points_cmd(o: PointsCommand) -> None:
     """Matched and triangulated keypoints of a stereo pair (before any labelling)."""
     from scenespeak.perception import plausibility, stereo
     from scenespeak.perception.features import load_image
 
     rig = _load_rig(
-        calib, calib_right, image_size=image_size, units=units, up=up, pitch=pitch, swap=swap
+        o.calib,
+        o.calib_right,
+        image_size=o.image_size,
+        units=o.units,
+        up=o.up,
+        pitch=o.pitch,
+        swap=o.swap,
     )
-    if swap:
-        left, right = right, left
+    left, right = (o.right, o.left) if o.swap else (o.left, o.right)
     # colour, as describe reads them (one path: SIFT and SGBM see the same gray conversion)
     left_img = load_image(left, gray=False)
     right_img = load_image(right, gray=False)
-    with _status("matching the stereo pair", quiet):
+    with _status("matching the stereo pair", o.quiet):
         plausibility.check_pair_order(left_img, right_img, rig, names=(str(left), str(right)))
         points = _stereo_points(
-            stereo, left_img, right_img, rig, ratio=ratio, sources=(left, right)
+            stereo, left_img, right_img, rig, ratio=o.ratio, sources=(left, right)
         )
         plausibility.check_depths(points.xyz[:, 2], points.disparity, rig.source)
-    if fmt is PointsFormat.ply:
-        if out is None:
+    if o.fmt is PointsFormat.ply:
+        if o.out is None:
             raise InputError(
                 "--out", "PLY is binary-free but long: give --out FILE for --format ply"
             )
         try:
-            stereo.write_ply(points, out)
+            stereo.write_ply(points, o.out)
         except OSError as exc:
-            raise InputError(out, f"cannot write ({exc.strerror or exc})") from exc
+            raise InputError(o.out, f"cannot write ({exc.strerror or exc})") from exc
         return
     text = json.dumps(stereo.points_to_json(points))
-    if out is None:
+    if o.out is None:
         _echo(text)
     else:
-        _write_text(out, text + "\n")
+        _write_text(o.out, text + "\n")
 
 
 def _stereo_points(
