@@ -87,7 +87,7 @@ def test_refuses_what_click_cannot_take() -> None:
         options_signature(Factory)
 
 
-@pytest.mark.parametrize("command", ["points"])
+@pytest.mark.parametrize("command", ["describe", "watch", "points", "annotate"])
 def test_the_wide_commands_take_one_options_object(command: str) -> None:
     from scenespeak.cli import _full  # noqa: F401  (registers the commands)
     from scenespeak.cli._app import app

@@ -6,12 +6,14 @@ import sys
 import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Annotated, Any
 
 import typer
 
 from scenespeak.cli._app import QuietOpt, _stderr_console, app
+from scenespeak.cli._options import takes_options
 
 #: Without a terminal (a batch job's log), a progress line at most this often (seconds).
 _PLAIN_EVERY_S = 30.0
@@ -81,59 +83,65 @@ def scene_progress(quiet: bool = False) -> Iterator[Callable[[int, int], None] |
         yield update
 
 
-@app.command("annotate")
-def annotate_cmd(
-    dataset: Annotated[Path, typer.Argument(help="A folder of scene folders.")],
+@dataclass(frozen=True, kw_only=True)
+class AnnotateCommand:
+    """The command line of ``scenespeak annotate`` (see :mod:`scenespeak.cli._options`)."""
+
+    dataset: Annotated[Path, typer.Argument(help="A folder of scene folders.")]
     out: Annotated[
         Path, typer.Option("--out", help="JSON Lines output, one line per ordered pair.")
-    ],
+    ]
     db: Annotated[
         Path | None,
         typer.Option(
             "--db",
             help="Object database (default: learnt from DATASET/objects/ training views).",
         ),
-    ] = None,
+    ] = None
     workers: Annotated[
         int, typer.Option("--workers", min=1, help="Local worker processes (1: this process).")
-    ] = 2,
+    ] = 2
     scheduler: Annotated[
         str | None,
         typer.Option("--scheduler", help="An existing Dask scheduler, tcp://HOST:PORT."),
-    ] = None,
+    ] = None
     resume: Annotated[
         bool, typer.Option("--resume", help="Continue a killed run: skip finished scenes.")
-    ] = False,
+    ] = False
     retry_failed: Annotated[
         bool, typer.Option("--retry-failed", help="With --resume: run failed scenes again.")
-    ] = False,
+    ] = False
     parquet: Annotated[
         Path | None, typer.Option("--parquet", help="Also write the pairs as Parquet.")
-    ] = None,
-    batch: Annotated[int, typer.Option("--batch", min=1, help="Scenes per task.")] = 2,
-    quiet: QuietOpt = False,
-) -> None:
+    ] = None
+    batch: Annotated[int, typer.Option("--batch", min=1, help="Scenes per task.")] = 2
+    quiet: QuietOpt = False
+
+
+@app.command("annotate")
+@takes_options(AnnotateCommand)
+def annotate_cmd(o: AnnotateCommand) -> None:
     """Label every ordered pair of objects of every scene: JSON Lines (and Parquet)."""
     from scenespeak.errors import InputError
     from scenespeak.tools.annotate import annotate
     from scenespeak.tools.engine import EngineOptions
 
-    if retry_failed and not resume:
+    if o.retry_failed and not o.resume:
         raise InputError("--retry-failed", "only makes sense with --resume")
-    if scheduler is not None and workers != 2:
+    if o.scheduler is not None and o.workers != 2:
         raise InputError("--workers", "give either --workers or --scheduler, not both")
-    engine = EngineOptions(workers=workers, scheduler=scheduler, batch=batch)
+    engine = EngineOptions(workers=o.workers, scheduler=o.scheduler, batch=o.batch)
     summary: Any
-    with scene_progress(quiet) as progress:
+    with scene_progress(o.quiet) as progress:
         summary = annotate(
-            dataset,
-            out,
-            db=db,
+            o.dataset,
+            o.out,
+            db=o.db,
             engine=engine,
-            resume=resume,
-            retry_failed=retry_failed,
-            parquet=parquet,
+            resume=o.resume,
+            retry_failed=o.retry_failed,
+            parquet=o.parquet,
             progress=progress,
         )
-    if not quiet:
+    if not o.quiet:
         sys.stderr.write(summary.to_text() + "\n")

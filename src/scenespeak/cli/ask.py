@@ -2,8 +2,8 @@
 
 The scene is a saved ``describe --format json`` output (``--scene FILE``: no image work, no
 NumPy for most questions) or any input form of ``describe``: the command's options are
-``describe``'s own input options (its signature minus ``OUTPUT_OPTIONS``), all made optional
-because ``--scene`` can stand for them, and the scene is described by
+``describe``'s own input options (the fields of ``DescribeCommand`` minus ``OUTPUT_OPTIONS``),
+all made optional because ``--scene`` can stand for them, and the scene is described by
 :func:`scenespeak.cli.describe.describe_inputs`.
 """
 
@@ -17,8 +17,9 @@ from typing import Annotated, Any, get_args, get_origin
 import typer
 
 from scenespeak.cli._app import TextOrJson, _echo, _status, app
+from scenespeak.cli._options import options_signature
 from scenespeak.cli._quick import answer_saved
-from scenespeak.cli.describe import OUTPUT_OPTIONS, describe_cmd, describe_inputs
+from scenespeak.cli.describe import OUTPUT_OPTIONS, DescribeCommand, describe_inputs
 
 __all__ = ["ask_cmd"]
 
@@ -77,13 +78,13 @@ def _signature() -> inspect.Signature:
             annotation=Annotated[TextOrJson, typer.Option("--format", help="text or json.")],
         ),
     ]
-    described = inspect.signature(describe_cmd, eval_str=True).parameters.values()
+    described = options_signature(DescribeCommand).parameters
     inputs = [
         _optional(p).replace(kind=inspect.Parameter.KEYWORD_ONLY)
-        for p in described
+        for p in described.values()
         if p.name not in OUTPUT_OPTIONS
     ]
-    quiet = inspect.signature(describe_cmd, eval_str=True).parameters["quiet"]
+    quiet = described["quiet"]
     return inspect.Signature([*own, *inputs, quiet.replace(kind=inspect.Parameter.KEYWORD_ONLY)])
 
 

@@ -2,13 +2,16 @@
 
 The scene's input options (images, calibration, database, and whatever input forms are added
 here later) are read by :func:`describe_inputs`; ``scenespeak ask`` (``cli/ask.py``) takes the
-same options by copying this command's signature minus :data:`OUTPUT_OPTIONS`, so a new input
-form added to ``describe_cmd`` and handled in :func:`describe_inputs` reaches ``ask`` as is.
+same options by copying this command's signature (the fields of :class:`DescribeCommand`, see
+:mod:`scenespeak.cli._options`) minus :data:`OUTPUT_OPTIONS`, so a new input form added to
+``DescribeCommand`` and handled in :func:`describe_inputs` reaches ``ask`` as is.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import json
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Annotated, Any
 
@@ -28,24 +31,28 @@ from scenespeak.cli._app import (
     _status,
     app,
 )
+from scenespeak.cli._options import takes_options
 from scenespeak.errors import InputError
 
-#: describe_cmd's parameters that say what to print, not which scene: ``ask`` leaves them out.
+#: describe_cmd's options (fields of :class:`DescribeCommand`) that say what to print, not
+#: which scene: ``ask`` leaves them out.
 OUTPUT_OPTIONS = frozenset({"fmt", "figures", "summary", "viewer", "about", "quiet"})
 
 
-@app.command("describe")
-def describe_cmd(
+@dataclass(frozen=True, kw_only=True)
+class DescribeCommand:
+    """The command line of ``scenespeak describe`` (``ask`` takes its inputs, see above)."""
+
     images: Annotated[
         list[Path],
         typer.Argument(
             help="LEFT RIGHT (a stereo pair, with --calib), or one COLOR image (with --depth "
             "and --intrinsics, or with --masks/--boxes alone for the image plane)."
         ),
-    ],
-    db: Annotated[
-        Path | None, typer.Option("--db", help="The object database (SQLite file).")
-    ] = None,
+    ]
+    db: Annotated[Path | None, typer.Option("--db", help="The object database (SQLite file).")] = (
+        None
+    )
     calib: Annotated[
         Path | None,
         typer.Option(
@@ -53,8 +60,8 @@ def describe_cmd(
             help="Calibration of a stereo pair: JSON (short or full form), OpenCV FileStorage "
             "YAML, or the LEFT camera_info YAML of a ROS pair (then give --calib-right).",
         ),
-    ] = None,
-    calib_right: CalibRightOpt = None,
+    ] = None
+    calib_right: CalibRightOpt = None
     depth: Annotated[
         Path | None,
         typer.Option(
@@ -62,10 +69,10 @@ def describe_cmd(
             help="Depth registered to COLOR: 16-bit PNG (units of --depth-scale metres), float "
             "TIFF or .npy in metres; 0, NaN, inf = no depth.",
         ),
-    ] = None,
+    ] = None
     depth_scale: Annotated[
         float, typer.Option("--depth-scale", help="Metres per unit of an integer depth image.")
-    ] = 0.001,
+    ] = 0.001
     intrinsics: Annotated[
         Path | None,
         typer.Option(
@@ -73,100 +80,87 @@ def describe_cmd(
             help='COLOR\'s camera: JSON {"fx","fy","cx","cy","width","height","up"?}, ROS '
             "camera_info YAML or OpenCV YAML.",
         ),
-    ] = None,
+    ] = None
     masks: Annotated[
         Path | None,
         typer.Option(
             "--masks", help="Instance image (PNG 8/16-bit, 0 = background, k = instance k)."
         ),
-    ] = None,
+    ] = None
     labels: Annotated[
         Path | None,
         typer.Option("--labels", help='Labels of the instances: JSON {"1": "mug", "2": "can"}.'),
-    ] = None,
+    ] = None
     boxes: Annotated[
         Path | None,
         typer.Option(
             "--boxes", help='COCO detections: [{"bbox": [x, y, w, h], "label": ..., "score": ...}].'
         ),
-    ] = None,
+    ] = None
     min_score: Annotated[
         float, typer.Option("--min-score", help="Ignore boxes with a lower score.")
-    ] = 0.0,
+    ] = 0.0
     estimate_up: Annotated[
         bool,
         typer.Option(
             "--estimate-up", help="Estimate up from the support plane even if --intrinsics give it."
         ),
-    ] = False,
-    fmt: Annotated[TextOrJson, typer.Option("--format", help="text or json.")] = TextOrJson.text,
+    ] = False
+    fmt: Annotated[TextOrJson, typer.Option("--format", help="text or json.")] = TextOrJson.text
     figures: Annotated[
         Path | None, typer.Option("--figures", help="Also write a PNG of every stage here.")
-    ] = None,
+    ] = None
     dense: Annotated[
         bool,
         typer.Option(
             "--dense/--no-dense",
             help="Take each recognised object's points from dense stereo inside its outline.",
         ),
-    ] = True,
+    ] = True
     unknown: Annotated[
         bool,
         typer.Option(
             "--unknown/--no-unknown", help="Cluster unlabelled points into unknown objects."
         ),
-    ] = True,
+    ] = True
     summary: Annotated[
         bool, typer.Option("--summary", help="At most n + 1 sentences about the whole scene.")
-    ] = False,
+    ] = False
     viewer: Annotated[
         bool,
         typer.Option("--viewer", help='Each object relative to the camera ("in front of me").'),
-    ] = False,
+    ] = False
     about: Annotated[
         str | None,
         typer.Option("--about", help="Only the relations whose argument is this object."),
-    ] = None,
-    image_size: ImageSizeOpt = None,
-    units: UnitsOpt = "m",
-    up: UpOpt = None,
-    pitch: PitchOpt = None,
-    swap: SwapOpt = False,
-    quiet: QuietOpt = False,
-) -> None:
+    ] = None
+    image_size: ImageSizeOpt = None
+    units: UnitsOpt = "m"
+    up: UpOpt = None
+    pitch: PitchOpt = None
+    swap: SwapOpt = False
+    quiet: QuietOpt = False
+
+
+@app.command("describe")
+@takes_options(DescribeCommand)
+def describe_cmd(o: DescribeCommand) -> None:
     """Describe the spatial relations of the objects: a stereo pair, colour + depth, or masks."""
-    if figures is not None and (len(images) != 2 or db is None):
+    if o.figures is not None and (len(o.images) != 2 or o.db is None):
         raise InputError(
             "--figures", "the stage pictures are drawn for stereo pairs with --db only"
         )
-    with _status("describing the scene", quiet):
-        description = describe_inputs(
-            images=images,
-            db=db,
-            calib=calib,
-            calib_right=calib_right,
-            depth=depth,
-            depth_scale=depth_scale,
-            intrinsics=intrinsics,
-            masks=masks,
-            labels=labels,
-            boxes=boxes,
-            min_score=min_score,
-            estimate_up=estimate_up,
-            dense=dense,
-            unknown=unknown,
-            image_size=image_size,
-            units=units,
-            up=up,
-            pitch=pitch,
-            swap=swap,
-        )
-    if figures is not None:
-        _write_figures(description, figures)
-    if summary or viewer or about is not None:
-        _print_views(description, fmt, summary=summary, viewer=viewer, about=about)
+    inputs = {
+        f.name: getattr(o, f.name) for f in dataclasses.fields(o) if f.name not in OUTPUT_OPTIONS
+    }
+    with _status("describing the scene", o.quiet):
+        description = describe_inputs(**inputs)
+    if o.figures is not None:
+        _write_figures(description, o.figures)
+    if o.summary or o.viewer or o.about is not None:
+        _print_views(description, o.fmt, summary=o.summary, viewer=o.viewer, about=o.about)
     else:
-        _print_description(description, fmt)
+        _print_description(description, o.fmt)
 
 
 def describe_inputs(**inputs: Any) -> Any:
@@ -175,7 +169,7 @@ def describe_inputs(**inputs: Any) -> Any:
     Parameters
     ----------
     **inputs
-        ``describe_cmd``'s parameters that are not in :data:`OUTPUT_OPTIONS` (``images``,
+        The fields of :class:`DescribeCommand` that are not in :data:`OUTPUT_OPTIONS` (``images``,
         ``db``, ``calib``, ``depth``, ``masks`` …; None where not given).
 
     Returns

@@ -13,6 +13,7 @@ from typing import Annotated, Any
 import typer
 
 from scenespeak.cli._app import CalibRightOpt, QuietOpt, app
+from scenespeak.cli._options import takes_options
 from scenespeak.errors import InputError, ScenespeakError
 
 
@@ -92,104 +93,109 @@ def _warn(where: str, problem: str) -> None:
     sys.stderr.flush()
 
 
-@app.command("watch")
-def watch_cmd(
+@dataclass(frozen=True, kw_only=True)
+class WatchCommand:
+    """The command line of ``scenespeak watch`` (see :mod:`scenespeak.cli._options`)."""
+
     db: Annotated[
         Path | None,
         typer.Option("--db", help="The object database (stereo; RGB-D frames without masks)."),
-    ] = None,
+    ] = None
     calib: Annotated[
         Path | None, typer.Option("--calib", help="Calibration (as for describe).")
-    ] = None,
-    calib_right: CalibRightOpt = None,
+    ] = None
+    calib_right: CalibRightOpt = None
     frames: Annotated[
         Path | None,
         typer.Option(
             "--frames", help="Folder: NNNN/{left,right}.png or left_NNNN.png + right_NNNN.png."
         ),
-    ] = None,
-    left_video: Annotated[Path | None, typer.Option("--left-video", help="Left video.")] = None,
-    right_video: Annotated[Path | None, typer.Option("--right-video", help="Right video.")] = None,
-    sbs: Annotated[Path | None, typer.Option("--sbs", help="Side-by-side stereo video.")] = None,
+    ] = None
+    left_video: Annotated[Path | None, typer.Option("--left-video", help="Left video.")] = None
+    right_video: Annotated[Path | None, typer.Option("--right-video", help="Right video.")] = None
+    sbs: Annotated[Path | None, typer.Option("--sbs", help="Side-by-side stereo video.")] = None
     cameras: Annotated[
         tuple[int, int] | None, typer.Option("--cameras", help="Two OpenCV camera indices.")
-    ] = None,
-    rosbag: Annotated[Path | None, typer.Option("--rosbag", help="A ROS 2 (or 1) bag.")] = None,
-    left_topic: Annotated[
-        str | None, typer.Option("--left-topic", help="Left Image topic.")
-    ] = None,
-    right_topic: Annotated[
-        str | None, typer.Option("--right-topic", help="Right Image topic.")
-    ] = None,
+    ] = None
+    rosbag: Annotated[Path | None, typer.Option("--rosbag", help="A ROS 2 (or 1) bag.")] = None
+    left_topic: Annotated[str | None, typer.Option("--left-topic", help="Left Image topic.")] = None
+    right_topic: Annotated[str | None, typer.Option("--right-topic", help="Right Image topic.")] = (
+        None
+    )
     left_info: Annotated[
         str | None, typer.Option("--left-info", help="Left CameraInfo topic (instead of --calib).")
-    ] = None,
+    ] = None
     right_info: Annotated[
         str | None, typer.Option("--right-info", help="Right CameraInfo topic.")
-    ] = None,
+    ] = None
     keyframe_every: Annotated[
         int,
         typer.Option("--keyframe-every", min=1, help="Full recognition at least every K frames."),
-    ] = 10,
+    ] = 10
     fps: Annotated[
         float, typer.Option("--fps", min=0.001, help="Frame rate of a --frames folder (time_s).")
-    ] = 30.0,
+    ] = 30.0
     max_frames: Annotated[
         int | None, typer.Option("--max-frames", min=1, help="Stop after this many frames.")
-    ] = None,
+    ] = None
     unknown: Annotated[
         bool, typer.Option("--unknown/--no-unknown", help="Also keep unknown point clusters.")
-    ] = False,
+    ] = False
     rgbd: Annotated[
         Path | None,
         typer.Option("--rgbd", help="Folder of RGB-D frames: NNNN/{color,depth,masks}.png."),
-    ] = None,
-    color_topic: Annotated[str | None, typer.Option(help="Colour Image topic (RGB-D bag).")] = None,
-    depth_topic: Annotated[str | None, typer.Option(help="Depth Image topic (RGB-D bag).")] = None,
-    masks_topic: Annotated[str | None, typer.Option(help="Instance-mask Image topic.")] = None,
-    info_topic: Annotated[str | None, typer.Option(help="Colour CameraInfo topic.")] = None,
+    ] = None
+    color_topic: Annotated[str | None, typer.Option(help="Colour Image topic (RGB-D bag).")] = None
+    depth_topic: Annotated[str | None, typer.Option(help="Depth Image topic (RGB-D bag).")] = None
+    masks_topic: Annotated[str | None, typer.Option(help="Instance-mask Image topic.")] = None
+    info_topic: Annotated[str | None, typer.Option(help="Colour CameraInfo topic.")] = None
     intrinsics: Annotated[
         Path | None, typer.Option("--intrinsics", help="Colour camera of RGB-D frames.")
-    ] = None,
+    ] = None
     labels: Annotated[
         Path | None, typer.Option("--labels", help="Labels JSON of the RGB-D masks.")
-    ] = None,
+    ] = None
     depth_scale: Annotated[
         float, typer.Option("--depth-scale", min=1e-9, help="Metres per depth unit.")
-    ] = 0.001,
-    quiet: QuietOpt = False,
-) -> None:
+    ] = 0.001
+    quiet: QuietOpt = False
+
+
+@app.command("watch")
+@takes_options(WatchCommand)
+def watch_cmd(o: WatchCommand) -> None:
     """Describe a stereo or RGB-D stream frame by frame with a working memory (JSON Lines)."""
     from scenespeak.cli._watch_rgbd import RGBDWatch, watch_rgbd
 
     w = RGBDWatch(
-        rgbd, rosbag, color_topic, depth_topic, masks_topic, info_topic, intrinsics, labels,
-        depth_scale, fps, max_frames,
+        o.rgbd, o.rosbag, o.color_topic, o.depth_topic, o.masks_topic, o.info_topic,
+        o.intrinsics, o.labels, o.depth_scale, o.fps, o.max_frames,
     )  # fmt: skip
     if w.wanted:
-        watch_rgbd(w, db)
+        watch_rgbd(w, o.db)
         return
-    if db is None:
+    if o.db is None:
         raise InputError("--db", "a stereo stream needs the object database")
     from scenespeak.live.stream import SceneStream, StreamOptions
     from scenespeak.perception.database import ObjectDatabase
     from scenespeak.perception.tracking import TrackingOptions
     from scenespeak.pipeline import PipelineOptions
 
-    del quiet  # no progress: the stream itself is the output
+    # (o.quiet: no progress, the stream itself is the output)
     with tempfile.TemporaryDirectory(prefix="scenespeak-watch-") as tmp:
-        rig = _rig(calib, calib_right, rosbag, (left_info, right_info), tmp)
+        rig = _rig(o.calib, o.calib_right, o.rosbag, (o.left_info, o.right_info), tmp)
         src = _StreamSource(
-            frames, left_video, right_video, sbs, cameras, rosbag, (left_topic, right_topic)
-        )
-        items = _source(src, fps, max_frames)
+            o.frames, o.left_video, o.right_video, o.sbs, o.cameras, o.rosbag,
+            (o.left_topic, o.right_topic),
+        )  # fmt: skip
+        items = _source(src, o.fps, o.max_frames)
         options = StreamOptions(
-            tracking=TrackingOptions(keyframe_every=keyframe_every),
-            pipeline=PipelineOptions(unknown=unknown, summary=False),
+            tracking=TrackingOptions(keyframe_every=o.keyframe_every),
+            pipeline=PipelineOptions(unknown=o.unknown, summary=False),
         )
-        with ObjectDatabase.open(db, readonly=True) as database:
+        with ObjectDatabase.open(o.db, readonly=True) as database:
             stream = SceneStream(rig, database, options)
-            _run(stream, items, max_frames)
+            _run(stream, items, o.max_frames)
 
 
 def _run(stream: Any, items: Iterator[Any], max_frames: int | None) -> None:
