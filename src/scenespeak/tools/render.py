@@ -10,6 +10,7 @@ import tempfile
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import cv2
 import numpy as np
@@ -18,6 +19,8 @@ from numpy.typing import NDArray
 __all__ = [
     "Camera",
     "MeshSpec",
+    "capture",
+    "load_bodies",
     "render",
     "render_with_depth",
     "texture_image",
@@ -226,71 +229,93 @@ def render_with_depth(
     cid = p.connect(p.DIRECT)
     try:
         with tempfile.TemporaryDirectory(prefix="scenespeak-render-") as tmp:
-            tmpdir = Path(tmp)
-            floor = p.createVisualShape(
-                p.GEOM_BOX, halfExtents=[30, 30, 0.005], rgbaColor=FLOOR_RGBA, physicsClientId=cid
-            )
-            floor_id = p.createMultiBody(
-                baseMass=0,
-                baseVisualShapeIndex=floor,
-                basePosition=[0, 0, -0.005],
-                physicsClientId=cid,
-            )
-            ids: dict[int, int] = {floor_id: -1}
-            textures: dict[str, int] = {}
-            for k, m in enumerate(meshes):
-                obj = tmpdir / f"mesh_{k}.obj"
-                if m.shape == "cylinder":
-                    write_cylinder_obj(obj, m.size[0] / 2, m.size[2])
-                else:
-                    write_box_obj(obj, *m.size)
-                if m.texture not in textures:
-                    png = tmpdir / f"tex_{len(textures)}.png"
-                    cv2.imwrite(str(png), texture_image(m.texture)[:, :, ::-1])
-                    textures[m.texture] = p.loadTexture(str(png), physicsClientId=cid)
-                vis = p.createVisualShape(p.GEOM_MESH, fileName=str(obj), physicsClientId=cid)
-                body = p.createMultiBody(
-                    baseMass=0,
-                    baseVisualShapeIndex=vis,
-                    basePosition=list(m.position),
-                    baseOrientation=p.getQuaternionFromEuler([0, 0, np.radians(m.yaw_deg)]),
-                    physicsClientId=cid,
-                )
-                p.changeVisualShape(
-                    body,
-                    -1,
-                    textureUniqueId=textures[m.texture],
-                    rgbaColor=[1, 1, 1, 1],
-                    physicsClientId=cid,
-                )
-                ids[body] = k
-            out = []
-            for cam in cameras:
-                w, h = cam.image_size
-                s = supersample
-                res = p.getCameraImage(
-                    w * s,
-                    h * s,
-                    cam.view(),
-                    cam.projection(s),
-                    renderer=p.ER_TINY_RENDERER,
-                    shadow=0,
-                    lightDirection=list(LIGHT_DIRECTION),
-                    physicsClientId=cid,
-                )
-                rgba = np.reshape(np.asarray(res[2], np.uint8), (h * s, w * s, 4))
-                rgb = rgba[:, :, :3].astype(np.float32).reshape(h, s, w, s, 3).mean(axis=(1, 3))
-                raw = np.reshape(np.asarray(res[4], np.int64), (h * s, w * s))
-                seg = np.full(raw.shape, -1, np.int32)
-                for body, k in ids.items():
-                    seg[raw == body] = k
-                buf = np.reshape(np.asarray(res[3], np.float64), (h * s, w * s))
-                z = FAR * NEAR / (FAR - (FAR - NEAR) * buf)
-                z[buf >= 1.0 - 1e-7] = np.nan
-                out.append((np.round(rgb).astype(np.uint8), seg, z.astype(np.float32)))
-            return out
+            ids = load_bodies(p, cid, meshes, Path(tmp))
+            return [capture(p, cid, cam, supersample, ids) for cam in cameras]
     finally:
         p.disconnect(physicsClientId=cid)
+
+
+def load_bodies(p: Any, cid: int, meshes: Sequence[MeshSpec], tmpdir: Path) -> dict[int, int]:
+    """Add the floor and every mesh to pybullet client ``cid`` (module ``p``), textured and posed.
+
+    Meshes and textures are written into ``tmpdir`` (each texture once). The scene generator
+    (:func:`render_with_depth`) and the sequence renderer
+    (:mod:`scenespeak.tools.sequences`, which then moves the bodies frame by frame) share it.
+
+    Returns
+    -------
+    dict
+        pybullet body id → index into ``meshes`` (-1 for the floor), in creation order.
+    """
+    floor = p.createVisualShape(
+        p.GEOM_BOX, halfExtents=[30, 30, 0.005], rgbaColor=FLOOR_RGBA, physicsClientId=cid
+    )
+    floor_id = p.createMultiBody(
+        baseMass=0,
+        baseVisualShapeIndex=floor,
+        basePosition=[0, 0, -0.005],
+        physicsClientId=cid,
+    )
+    ids: dict[int, int] = {floor_id: -1}
+    textures: dict[str, int] = {}
+    for k, m in enumerate(meshes):
+        obj = tmpdir / f"mesh_{k}.obj"
+        if m.shape == "cylinder":
+            write_cylinder_obj(obj, m.size[0] / 2, m.size[2])
+        else:
+            write_box_obj(obj, *m.size)
+        if m.texture not in textures:
+            png = tmpdir / f"tex_{len(textures)}.png"
+            cv2.imwrite(str(png), texture_image(m.texture)[:, :, ::-1])
+            textures[m.texture] = p.loadTexture(str(png), physicsClientId=cid)
+        vis = p.createVisualShape(p.GEOM_MESH, fileName=str(obj), physicsClientId=cid)
+        body = p.createMultiBody(
+            baseMass=0,
+            baseVisualShapeIndex=vis,
+            basePosition=list(m.position),
+            baseOrientation=p.getQuaternionFromEuler([0, 0, np.radians(m.yaw_deg)]),
+            physicsClientId=cid,
+        )
+        p.changeVisualShape(
+            body,
+            -1,
+            textureUniqueId=textures[m.texture],
+            rgbaColor=[1, 1, 1, 1],
+            physicsClientId=cid,
+        )
+        ids[body] = k
+    return ids
+
+
+def capture(
+    p: Any, cid: int, cam: Camera, supersample: int, ids: dict[int, int]
+) -> tuple[NDArray[np.uint8], NDArray[np.int32], NDArray[np.float32]]:
+    """One camera's view of client ``cid``: RGB, segmentation, depth (:func:`render_with_depth`).
+
+    ``ids`` maps body ids to segment values (:func:`load_bodies`); other pixels are -1.
+    """
+    w, h = cam.image_size
+    s = supersample
+    res = p.getCameraImage(
+        w * s,
+        h * s,
+        cam.view(),
+        cam.projection(s),
+        renderer=p.ER_TINY_RENDERER,
+        shadow=0,
+        lightDirection=list(LIGHT_DIRECTION),
+        physicsClientId=cid,
+    )
+    rgba = np.reshape(np.asarray(res[2], np.uint8), (h * s, w * s, 4))
+    rgb = rgba[:, :, :3].astype(np.float32).reshape(h, s, w, s, 3).mean(axis=(1, 3))
+    raw = np.reshape(np.asarray(res[4], np.int64), (h * s, w * s))
+    seg = np.full(raw.shape, -1, np.int32)
+    for body, k in ids.items():
+        seg[raw == body] = k
+    buf = np.reshape(np.asarray(res[3], np.float64), (h * s, w * s))
+    z = FAR * NEAR / (FAR - (FAR - NEAR) * buf)
+    z[buf >= 1.0 - 1e-7] = np.nan
+    return np.round(rgb).astype(np.uint8), seg, z.astype(np.float32)
 
 
 def downsample_labels(seg: NDArray[np.int32], supersample: int, n: int) -> NDArray[np.uint8]:

@@ -54,16 +54,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from scenespeak.errors import InputError
-from scenespeak.tools.render import (
-    FAR,
-    FLOOR_RGBA,
-    LIGHT_DIRECTION,
-    NEAR,
-    Camera,
-    texture_image,
-    write_box_obj,
-    write_cylinder_obj,
-)
+from scenespeak.tools.render import Camera, MeshSpec, capture, load_bodies
 from scenespeak.tools.scenes import (
     CATALOGUE,
     SUPERSAMPLE,
@@ -222,42 +213,17 @@ def _cameras(rig: Rig, pan_deg: float) -> tuple[Camera, Camera]:
 
 
 class _Renderer:
-    """One pybullet connection with every object of a sequence loaded once."""
+    """One pybullet connection with every object of a sequence loaded once (parked below the
+    floor; :meth:`frame` moves them)."""
 
     def __init__(self, objects: Sequence[CatalogueObject], tmp: Path) -> None:
         import pybullet as p
 
         self.p = p
         self.cid = p.connect(p.DIRECT)
-        floor = p.createVisualShape(
-            p.GEOM_BOX, halfExtents=[30, 30, 0.005], rgbaColor=FLOOR_RGBA, physicsClientId=self.cid
-        )
-        self.floor = p.createMultiBody(
-            baseMass=0, baseVisualShapeIndex=floor, basePosition=[0, 0, -0.005],
-            physicsClientId=self.cid,
-        )  # fmt: skip
-        self.bodies: list[int] = []
-        textures: dict[str, int] = {}
-        for k, obj in enumerate(objects):
-            mesh = tmp / f"mesh_{k}.obj"
-            if obj.shape == "cylinder":
-                write_cylinder_obj(mesh, obj.size[0] / 2, obj.size[2])
-            else:
-                write_box_obj(mesh, *obj.size)
-            if obj.texture not in textures:
-                png = tmp / f"tex_{obj.texture}.png"
-                cv2.imwrite(str(png), texture_image(obj.texture)[:, :, ::-1])
-                textures[obj.texture] = p.loadTexture(str(png), physicsClientId=self.cid)
-            vis = p.createVisualShape(p.GEOM_MESH, fileName=str(mesh), physicsClientId=self.cid)
-            body = p.createMultiBody(
-                baseMass=0, baseVisualShapeIndex=vis, basePosition=[0, 0, -5],
-                physicsClientId=self.cid,
-            )  # fmt: skip
-            p.changeVisualShape(
-                body, -1, textureUniqueId=textures[obj.texture], rgbaColor=[1, 1, 1, 1],
-                physicsClientId=self.cid,
-            )  # fmt: skip
-            self.bodies.append(body)
+        parked = [MeshSpec(o.shape, o.size, o.texture, (0.0, 0.0, -5.0), 0.0) for o in objects]
+        self.ids = load_bodies(p, self.cid, parked, tmp)
+        self.bodies = [body for body, k in self.ids.items() if k >= 0]
 
     def close(self) -> None:
         self.p.disconnect(physicsClientId=self.cid)
@@ -274,25 +240,7 @@ class _Renderer:
             p.resetBasePositionAndOrientation(
                 body, pos, p.getQuaternionFromEuler([0, 0, yaw]), physicsClientId=self.cid
             )
-        out = []
-        for cam in cams:
-            w, h = cam.image_size
-            s = SUPERSAMPLE
-            res = p.getCameraImage(
-                w * s, h * s, cam.view(), cam.projection(s), renderer=p.ER_TINY_RENDERER,
-                shadow=0, lightDirection=list(LIGHT_DIRECTION), physicsClientId=self.cid,
-            )  # fmt: skip
-            rgba = np.reshape(np.asarray(res[2], np.uint8), (h * s, w * s, 4))
-            rgb = rgba[:, :, :3].astype(np.float32).reshape(h, s, w, s, 3).mean(axis=(1, 3))
-            raw = np.reshape(np.asarray(res[4], np.int64), (h * s, w * s))
-            seg = np.full(raw.shape, -1, np.int32)
-            for k, body in enumerate(self.bodies):
-                seg[raw == body] = k
-            buf = np.reshape(np.asarray(res[3], np.float64), (h * s, w * s))
-            z = FAR * NEAR / (FAR - (FAR - NEAR) * buf)
-            z[buf >= 1.0 - 1e-7] = np.nan
-            out.append((np.round(rgb).astype(np.uint8), seg, z.astype(np.float32)))
-        return out
+        return [capture(p, self.cid, cam, SUPERSAMPLE, self.ids) for cam in cams]
 
 
 # --------------------------------------------------------------------------------------------
