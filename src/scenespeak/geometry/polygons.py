@@ -3,7 +3,9 @@
 One implementation of each: the cyclic shift (:func:`cyclic_next`), the shoelace area
 (:func:`polygon_area`), the area centroid (:func:`polygon_centroid`), and the exact area of the
 intersection of two simple polygons, convex or not (:func:`exact_intersection_area`, Green's
-theorem on the boundary pieces of each polygon inside the other). The force histograms
+theorem on the boundary pieces of each polygon inside the other), and the point-in-polygon
+test (:func:`winding_numbers`; :func:`points_in_polygon` for a vertex ring, with its boundary
+rule). The force histograms
 (:mod:`scenespeak.spatial.forces`) use them on their oriented boundary edges; anything with
 ``start``/``end`` edge arrays (a :class:`Boundary`) can.
 """
@@ -11,7 +13,7 @@ theorem on the boundary pieces of each polygon inside the other). The force hist
 from __future__ import annotations
 
 import math
-from typing import Protocol, TypeVar
+from typing import Literal, Protocol, TypeVar
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -319,6 +321,69 @@ def winding_numbers(points: NDArray[np.float64], boundary: Boundary) -> NDArray[
     return out
 
 
+class _Ring:
+    """A polygon's boundary as oriented edges, counter-clockwise (a :class:`Boundary`)."""
+
+    def __init__(self, p: NDArray[np.float64]) -> None:
+        q = np.asarray(p, dtype=np.float64)
+        self.start = q if polygon_area(q) >= 0.0 else q[::-1].copy()
+        self.end = cyclic_next(self.start)
+
+
+def points_in_polygon(
+    points: ArrayLike, polygon: ArrayLike, rule: Literal["even-odd", "nonzero"] = "even-odd"
+) -> NDArray[np.bool_]:
+    """Whether each point lies inside a polygon given as one ring of vertices.
+
+    The crossing count of :func:`winding_numbers` (the one point-in-polygon test of the
+    package; Hormann & Agathos 2001, "The point in polygon problem for arbitrary polygons",
+    Algorithm 2): the edges that cross the horizontal ray to the right of the point, each edge
+    from ``y0`` to ``y1`` covering the rows ``min(y0, y1) <= y < max(y0, y1)`` and only the
+    points strictly to its left. ``"even-odd"`` keeps the points crossed an odd number of
+    times, ``"nonzero"`` those of non-zero winding number; they differ only where the ring
+    crosses itself.
+
+    **Boundary rule** (half-open, as pixel-centre rasterisers): a point on the boundary is
+    inside where the interior lies to its right or above it (larger ``x``, larger ``y``) and
+    outside otherwise, so of the unit square the left and bottom edges are inside, the right
+    and top edges outside. Points exactly on an edge are rare for measured coordinates; the
+    rule only makes the answer definite.
+
+    Parameters
+    ----------
+    points : (P, 2) array_like
+        Query points.
+    polygon : (N, 2) array_like
+        The vertices, in either orientation. Fewer than 3 vertices or a non-finite one: no
+        point is inside.
+    rule : {"even-odd", "nonzero"}
+        Which points of a self-crossing ring are inside.
+
+    Returns
+    -------
+    (P,) bool array
+
+    Examples
+    --------
+    >>> sq = np.array([[0.0, 0.0], [10.0, 0.0], [10.0, 10.0], [0.0, 10.0]])
+    >>> points_in_polygon([[5, 5], [15, 5], [0, 5], [10, 5], [5, 0], [5, 10]], sq).tolist()
+    [True, False, True, False, True, False]
+    >>> star = np.array([[0, 0], [2, 4], [4, 0], [-1, 2.5], [5, 2.5]])  # a pentagram
+    >>> [points_in_polygon([[2, 2]], star, rule).item() for rule in ("even-odd", "nonzero")]
+    [False, True]
+    """
+    pts = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+    ring = np.asarray(polygon, dtype=np.float64).reshape(-1, 2)
+    if len(ring) < 3 or not np.all(np.isfinite(ring)):
+        return np.zeros(len(pts), bool)
+    w = winding_numbers(pts, _Ring(ring))
+    if rule == "nonzero":
+        return np.asarray(w != 0)
+    if rule == "even-odd":
+        return np.asarray(w % 2 != 0)
+    raise ValueError(f"unknown rule {rule!r}; use 'even-odd' or 'nonzero'")
+
+
 def boundaries_touch(a: Boundary, b: Boundary, tol: float) -> bool:
     """Whether some edge of ``a`` comes within ``tol`` of some edge of ``b``."""
     i, j = bbox_candidates(a.start, a.end, b.start, b.end, tol)
@@ -378,15 +443,6 @@ def _boundary_part_inside(
     keep = np.where(on_b, same & keep_shared, inside)
     xdy = 0.5 * (a0[:, 0] + a1[:, 0]) * (a1[:, 1] - a0[:, 1])
     return float(np.sum(xdy[keep]))
-
-
-class _Ring:
-    """A polygon's boundary as oriented edges, counter-clockwise (a :class:`Boundary`)."""
-
-    def __init__(self, p: NDArray[np.float64]) -> None:
-        q = np.asarray(p, dtype=np.float64)
-        self.start = q if polygon_area(q) >= 0.0 else q[::-1].copy()
-        self.end = cyclic_next(self.start)
 
 
 def exact_intersection_area(a: Boundary, b: Boundary) -> float:

@@ -14,6 +14,7 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
+from scenespeak.geometry.polygons import points_in_polygon
 from scenespeak.perception.features import Features
 from scenespeak.perception.recognition.index import DescriptorIndex
 from scenespeak.perception.recognition.options import LabelOptions
@@ -152,25 +153,14 @@ def _best_view(
 
 
 def inside_polygon(xy: NDArray[np.float64], polygon: NDArray[np.float64]) -> NDArray[np.bool_]:
-    """Whether each point lies inside a polygon (even-odd rule, one ray per point).
+    """Whether each point lies inside a polygon (even-odd rule; geometry's one point-in-polygon
+    test, :func:`~scenespeak.geometry.polygons.points_in_polygon`, and its boundary rule).
 
     >>> sq = np.array([[0.0, 0.0], [10.0, 0.0], [10.0, 10.0], [0.0, 10.0]])
     >>> inside_polygon(np.array([[5.0, 5.0], [15.0, 5.0]]), sq).tolist()
     [True, False]
     """
-    pts = np.asarray(xy, dtype=np.float64).reshape(-1, 2)
-    poly = np.asarray(polygon, dtype=np.float64).reshape(-1, 2)
-    inside = np.zeros(len(pts), bool)
-    if len(poly) < 3 or not np.all(np.isfinite(poly)):
-        return inside
-    x, y = pts[:, 0:1], pts[:, 1:2]
-    x0, y0 = poly[:, 0][None, :], poly[:, 1][None, :]
-    x1, y1 = np.roll(poly[:, 0], -1)[None, :], np.roll(poly[:, 1], -1)[None, :]
-    straddle = (y0 > y) != (y1 > y)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        cross_x = x0 + (y - y0) * (x1 - x0) / (y1 - y0)
-    hits = straddle & (x < cross_x)
-    return np.asarray(hits.sum(axis=1) % 2 == 1)
+    return points_in_polygon(xy, polygon, "even-odd")
 
 
 def _overlap_share(a: NDArray[np.float64], b: NDArray[np.float64]) -> float:
