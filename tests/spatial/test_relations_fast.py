@@ -2,13 +2,18 @@
 
 ``language.relate_objects`` prepares each polygon once, sweeps the force histograms of all
 pairs together (``forces._many_f0_f2``), computes the degrees of truth of all pairs in one
-batch (``_language_degrees.many_degrees``) and skips clipping for hulls an edge keeps apart.
-Every helper is compared here with the path it replaces, bit for bit, on random inputs.
+batch (``degrees.many_degrees``) and skips clipping for hulls an edge keeps apart. Each batch
+helper is compared with the package's own per-pair function on random inputs (the batch is
+designed to give the same floats). The geometry underneath (clipping, area, convexity) is
+checked against independent references and properties to a tolerance: Green's theorem for the
+clipped area, a triangle fan for the shoelace area, SciPy's hulls for convexity; no earlier
+implementation is kept here as the specification.
 """
 
 from __future__ import annotations
 
 import contextlib
+import math
 from collections.abc import Iterator
 
 import numpy as np
@@ -21,6 +26,8 @@ from scenespeak.errors import InputError
 from scenespeak.geometry.polygons import (
     _clip_convex,
     _clipped_away,
+    _Ring,
+    exact_intersection_area,
     intersection_area,
     is_convex,
     polygon_area,
@@ -223,73 +230,72 @@ def test_prefix_sums_refuse_long_rows() -> None:
 # -- clipping --------------------------------------------------------------------------------
 
 
-def _reference_clip(subject: np.ndarray, clip: np.ndarray) -> np.ndarray:
-    """The previous Sutherland-Hodgman loop, verbatim."""
-    if polygon_area(clip) < 0:
-        clip = clip[::-1]
-    out = subject
-    for i in range(len(clip)):
-        if len(out) == 0:
-            break
-        p0, p1 = clip[i], clip[(i + 1) % len(clip)]
-        edge = p1 - p0
-        side = edge[0] * (out[:, 1] - p0[1]) - edge[1] * (out[:, 0] - p0[0])
-        new: list[np.ndarray] = []
-        for j in range(len(out)):
-            cur, nxt = out[j], out[(j + 1) % len(out)]
-            sc, sn = side[j], side[(j + 1) % len(out)]
-            if sc >= 0:
-                new.append(cur)
-            if (sc >= 0) != (sn >= 0):
-                t = sc / (sc - sn)
-                new.append(cur + t * (nxt - cur))
-        out = np.array(new) if new else np.zeros((0, 2))
-    return out
-
-
-def _reference_area(a: np.ndarray, b: np.ndarray) -> float | None:
-    """The previous ``intersection_area`` for a convex ``b`` or ``a`` (None otherwise)."""
-    if is_convex(b):
-        clipped = _reference_clip(a, b)
-    elif is_convex(a):
-        clipped = _reference_clip(b, a)
-    else:
-        return None
-    return abs(polygon_area(clipped)) if len(clipped) >= 3 else 0.0
+def _in_convex(points: np.ndarray, clip: np.ndarray, tol: float) -> bool:
+    """Whether every point lies in the convex polygon ``clip`` (on its inner side of every edge,
+    to ``tol``): the definition, written here independently."""
+    c = clip if polygon_area(clip) >= 0 else clip[::-1]
+    e = np.roll(c, -1, axis=0) - c
+    rel = points[:, None, :] - c[None, :, :]
+    cross = e[None, :, 0] * rel[:, :, 1] - e[None, :, 1] * rel[:, :, 0]
+    length = np.hypot(e[:, 0], e[:, 1])[None, :]
+    return bool(np.all(cross >= -tol * length))
 
 
 @settings(max_examples=80)
 @given(seeds)
-def test_clipping_matches_the_textbook_loop(seed: int) -> None:
+def test_clipping_agrees_with_greens_theorem_and_stays_inside(seed: int) -> None:
+    """Sutherland-Hodgman clipping against the exact area of Green's theorem (another
+    algorithm: boundary pieces inside the other polygon), to a tolerance, and its properties:
+    the clipped polygon lies in the clip polygon, its area is at most either area, and a pair
+    said to be "clipped away" does not overlap."""
     rng = np.random.default_rng(seed)
     a, b = _scene(rng)[:2]
     for subject, clip in ((a, b), (b, a)):
-        if is_convex(clip):
-            ref = _reference_clip(subject, clip)
-            np.testing.assert_array_equal(_clip_convex(subject, clip), ref)
-            if _clipped_away(subject, clip):
-                assert len(ref) == 0
-        area = _reference_area(subject, clip)
-        if area is not None:
-            assert intersection_area(subject, clip) == area
-            assert (
-                intersection_area(
-                    subject, clip, a_convex=is_convex(subject), b_convex=is_convex(clip)
-                )
-                == area
-            )
+        if not is_convex(clip):
+            continue
+        scale = float(np.ptp(np.concatenate([subject, clip]), axis=0).max())
+        tol = 1e-9 * max(scale, 1.0) ** 2
+        exact = exact_intersection_area(_Ring(subject), _Ring(clip))
+        out = _clip_convex(subject, clip)
+        got = abs(polygon_area(out)) if len(out) >= 3 else 0.0
+        assert got == pytest.approx(exact, abs=tol)
+        assert intersection_area(subject, clip) == pytest.approx(exact, abs=tol)
+        assert got <= min(abs(polygon_area(subject)), abs(polygon_area(clip))) + tol
+        if len(out):
+            assert _in_convex(out, clip, 1e-9 * max(scale, 1.0))
+        if _clipped_away(subject, clip):
+            assert exact <= tol
 
 
-def test_polygon_area_and_convexity_without_roll() -> None:
+def test_clipping_a_polygon_by_itself_or_a_box_around_it_keeps_it() -> None:
+    rng = np.random.default_rng(12)
+    for _ in range(100):
+        p = _convex(rng)
+        area = abs(polygon_area(p))
+        assert abs(polygon_area(_clip_convex(p, p))) == pytest.approx(area, rel=1e-12)
+        lo, hi = p.min(axis=0) - 1.0, p.max(axis=0) + 1.0
+        box = np.array([lo, [hi[0], lo[1]], hi, [lo[0], hi[1]]])
+        assert abs(polygon_area(_clip_convex(p, box))) == pytest.approx(area, rel=1e-12)
+        assert intersection_area(p, p + (hi - lo) * 2.0) == 0.0
+
+
+def test_polygon_area_against_a_triangle_fan_and_convexity_against_hulls() -> None:
     rng = np.random.default_rng(11)
     for _ in range(50):
         p = rng.normal(size=(int(rng.integers(3, 20)), 2))
-        x, y = p[:, 0], p[:, 1]
-        assert polygon_area(p) == 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y))
-        d = np.roll(p, -1, axis=0) - p
-        cross = d[:, 0] * np.roll(d[:, 1], -1) - d[:, 1] * np.roll(d[:, 0], -1)
-        tol = 1e-12 * max(float(np.abs(cross).max()), 1e-300)
-        assert is_convex(p) == bool(np.all(cross >= -tol) or np.all(cross <= tol))
+        u, v = p[1:-1] - p[0], p[2:] - p[0]
+        fan = math.fsum(0.5 * (u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0]))
+        assert polygon_area(p) == pytest.approx(fan, rel=1e-9, abs=1e-12)
+        hull = p[ConvexHull(p).vertices]
+        assert is_convex(hull) and is_convex(hull[::-1].copy())
+    for _ in range(50):
+        star = _star(rng)
+        # push one vertex towards the centre: a reflex vertex, so not convex
+        centre = star.mean(axis=0)
+        dent = star.copy()
+        dent[0] = centre + 0.05 * (star[0] - centre)
+        assert not is_convex(dent)
+        assert is_convex(dent[ConvexHull(dent).vertices])
 
 
 # -- the force histograms of many pairs --------------------------------------------------------
