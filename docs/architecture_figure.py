@@ -13,7 +13,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 from matplotlib.patches import FancyArrowPatch, FancyBboxPatch
 
-GEOMETRY = "geometry/  polygons · frames (up, ground plane, heights) · clustering (DBSCAN)"
+GEOMETRY = "geometry/  polygons (overlap, point inside) · frames (up, ground, heights) · DBSCAN"
 PIPELINE = "pipeline.py  PipelineOptions (one options object per stage) → SceneDescription"
 ROOMS = {
     # name: (x, y, w, h, colour, lines)
