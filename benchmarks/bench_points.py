@@ -5,17 +5,14 @@ For a real pair (MiddEval2 "Art", or ``--pair LEFT RIGHT``, e.g. a generated sce
 command reads them, prints median wall-clock and process-CPU times, interleaved in one run, of:
 
 * SIFT of both images, one after the other (the floor the target is set against: ``points``
-  must take at most this + 25 %);
-* the command's stage today (``cli.points._stereo_points``: SIFT of both images in two
-  threads, the dense check over the whole image);
-* the plain stage (``stereo.stereo_points`` over the whole image, SIFT one after the other:
-  the points the command must give);
-* the stage with the dense check cropped to the matches plus 16 px, as ``describe`` runs it
-  (``PipelineOptions.dense_crop``; threaded SIFT), to show what the crop would save and how
-  many points it changes;
+  must take at most this + 25 %), and the two in two threads (as the command runs them);
+* the command's stage (``cli.points._stereo_points``: the pipeline's stereo stage, threaded
+  SIFT, the dense check cropped to the matches + 16 px, ``StereoOptions``);
+* the stage the command ran before issue 16 part C (threaded SIFT, the dense check over the
+  whole image), to show what the crop saves and how many points it changes;
 
-and checks that the command gives the same points as the plain stage. Images are decoded
-before timing.
+and checks that the command gives describe's points (``stereo_points(...,
+**StereoOptions().keywords())``). Images are decoded before timing.
 
 Run::
 
@@ -39,6 +36,7 @@ import cv2
 from scenespeak.cli.points import _stereo_points
 from scenespeak.perception import calibration, stereo
 from scenespeak.perception.features import detect, load_image, to_gray
+from scenespeak.perception.stage_options import StereoOptions
 
 ART = Path(__file__).resolve().parents[1] / "../shared/data/real/stereo/middeval2/Art"
 
@@ -55,14 +53,20 @@ def _size(text: str) -> tuple[int, int]:
     return int(w), int(h)
 
 
-def _crop16(left: Any, right: Any, rig: Any) -> Any:
-    """describe's stereo stage: threaded SIFT, dense check cropped to the matches + 16 px."""
+def _threaded_sift(left: Any, right: Any) -> tuple[Any, Any]:
+    """SIFT of both images, the right one in a second thread."""
     with ThreadPoolExecutor(max_workers=1) as pool:
         future = pool.submit(detect, to_gray(right), precise_upscale=False)
         fl = detect(to_gray(left), precise_upscale=False)
-        fr = future.result()
+        return fl, future.result()
+
+
+def _whole(left: Any, right: Any, rig: Any) -> Any:
+    """The command before issue 16 part C: threaded SIFT, the dense check over the whole
+    image."""
+    fl, fr = _threaded_sift(left, right)
     return stereo.stereo_points(
-        left, right, rig, features_left=fl, features_right=fr, dense_crop=True, dense_margin=16
+        left, right, rig, features_left=fl, features_right=fr, dense_crop=False, min_points=1
     ).points
 
 
@@ -72,6 +76,11 @@ def _same(a: Any, b: Any) -> str:
         return "yes"
     sa, sb = ({json.dumps(p) for p in x} for x in (pa, pb))
     return f"NO (+{len(sa - sb)} -{len(sb - sa)})"
+
+
+def _ratio(med: dict[str, tuple[float, float]], k: str) -> str:
+    """Case ``k`` over SIFT of both images: wall (CPU)."""
+    return f"{med[k][0] / med['sift'][0]:.2f} ({med[k][1] / med['sift'][1]:.2f})"
 
 
 def main() -> None:
@@ -87,10 +96,10 @@ def main() -> None:
     print(f"load average before: {' '.join(f'{x:.2f}' for x in os.getloadavg())}")
     print(f"pair: {left_path} / {right_path}, resized; wall (CPU) medians, s\n")
     print(
-        "| size | SIFT both | points now | now / SIFT | plain stage | cropped 16 px | "
-        "same points (now) | cropped: same points |"
+        "| size | SIFT both | SIFT, 2 threads | points now | now / SIFT | before (whole image) "
+        "| before / SIFT | now = describe's stage | now vs before |"
     )
-    print("| --- | ---: | ---: | ---: | ---: | ---: | --- | --- |")
+    print("| --- | ---: | ---: | ---: | ---: | ---: | ---: | --- | --- |")
     names = (Path("left"), Path("right"))
     for size in args.sizes:
         interp = cv2.INTER_AREA if size[0] < left0.shape[1] else cv2.INTER_LINEAR
@@ -106,13 +115,13 @@ def main() -> None:
         def now(left: Any = left, right: Any = right, rig: Any = rig) -> Any:
             return _stereo_points(stereo, left, right, rig, ratio=0.6, sources=names)
 
-        def plain(left: Any = left, right: Any = right, rig: Any = rig) -> Any:
-            return stereo.stereo_points(left, right, rig, ratio=0.6).points
+        def sift2(left: Any = left, right: Any = right) -> object:
+            return _threaded_sift(left, right)
 
-        def crop(left: Any = left, right: Any = right, rig: Any = rig) -> Any:
-            return _crop16(left, right, rig)
+        def before(left: Any = left, right: Any = right, rig: Any = rig) -> Any:
+            return _whole(left, right, rig)
 
-        cases = {"sift": sift, "now": now, "plain": plain, "crop": crop}
+        cases = {"sift": sift, "sift2": sift2, "now": now, "before": before}
         times: dict[str, list[tuple[float, float]]] = {k: [] for k in cases}
         for _ in range(args.repeat):  # interleaved: they share the machine's load
             for k, fn in cases.items():
@@ -121,13 +130,14 @@ def main() -> None:
             k: (statistics.median(w for w, _ in t), statistics.median(c for _, c in t))
             for k, t in times.items()
         }
-        a, b, c = now(), plain(), crop()
+        got, old = now(), before()
+        describe = stereo.stereo_points(left, right, rig, **StereoOptions().keywords()).points
         cell = {k: f"{w:.3f} ({c_:.3f})" for k, (w, c_) in med.items()}
-        ratio = f"{med['now'][0] / med['sift'][0]:.2f} ({med['now'][1] / med['sift'][1]:.2f})"
+
         print(
-            f"| {size[0]}×{size[1]} | {cell['sift']} | {cell['now']} | {ratio} | "
-            f"{cell['plain']} | {cell['crop']} | {_same(a, b)} ({len(a.xyz)} points) | "
-            f"{_same(c, b)} |"
+            f"| {size[0]}×{size[1]} | {cell['sift']} | {cell['sift2']} | {cell['now']} | "
+            f"{_ratio(med, 'now')} | {cell['before']} | {_ratio(med, 'before')} | "
+            f"{_same(got, describe)} ({len(got.xyz)} points) | {_same(got, old)} |"
         )
     print(f"\nload average after: {' '.join(f'{x:.2f}' for x in os.getloadavg())}")
 

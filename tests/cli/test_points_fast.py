@@ -1,9 +1,11 @@
-"""``scenespeak points`` runs the stereo stage fast (threaded SIFT, dense check cropped to the
-matches plus ``stereo.dense_check_margin()``) and must give the same points as the plain
-``stereo_points`` over the whole image, on the images read in colour as ``describe`` reads
-them: rendered card pairs, scenes of the generator, and the real Middlebury and KITTI pairs
-(resized to the benchmark's sizes). The default run takes a sample; with
-``SCENESPEAK_LONG_TESTS=1`` every real pair at 640×480, 1280×960 and 1920×1080 (minutes)."""
+"""``scenespeak points`` runs the pipeline's stereo stage (threaded SIFT, the dense check
+cropped to the matches plus ``stage_options.DENSE_MARGIN``, issue 16) and must give the
+points ``describe`` finds, bit for bit: ``describe_scene(...).points``, and the stage's call
+``stereo_points(..., **StereoOptions().keywords())`` on the images read in colour as
+``describe`` reads them: rendered card pairs, scenes of the generator, and the real
+Middlebury and KITTI pairs (resized to the benchmark's sizes). The default run takes a
+sample; with ``SCENESPEAK_LONG_TESTS=1`` every real pair at 640×480, 1280×960 and 1920×1080
+(minutes)."""
 
 from __future__ import annotations
 
@@ -20,6 +22,9 @@ from scenespeak.cli import main
 from scenespeak.perception import calibration, stereo
 from scenespeak.perception.calibfiles import read_calibration
 from scenespeak.perception.features import load_image
+from scenespeak.perception.recognition import ObjectDatabase
+from scenespeak.perception.stage_options import StereoOptions
+from scenespeak.pipeline import describe_scene
 
 CARDS = {"astronaut": (-0.5, 1.6, 0.5), "coffee": (0.45, 2.2, 0.6)}
 SIZES = ((640, 480), (1280, 960), (1920, 1080))
@@ -34,9 +39,35 @@ def _points(left: Path, right: Path, calib: Path, capsys: pytest.CaptureFixture[
 
 
 def _reference(left: Path, right: Path, rig: calibration.StereoRig) -> dict:
-    """The plain stage over the whole image, on the images as describe reads them."""
-    ref = stereo.stereo_points(load_image(left, gray=False), load_image(right, gray=False), rig)
+    """The pipeline's stereo stage (its options: the cropped dense check), on the images as
+    describe reads them."""
+    ref = stereo.stereo_points(
+        load_image(left, gray=False),
+        load_image(right, gray=False),
+        rig,
+        **StereoOptions().keywords(),
+    )
     return stereo.points_to_json(ref.points)
+
+
+def _described(left: Path, right: Path, rig: calibration.StereoRig, db_path: Path) -> dict:
+    """The points of ``describe_scene`` itself (the whole pipeline, threads and all)."""
+    with ObjectDatabase.open(db_path, readonly=True) as db:
+        desc = describe_scene(
+            load_image(left, gray=False), load_image(right, gray=False), rig, db, unknown=False
+        )
+    return stereo.points_to_json(desc.points)
+
+
+@pytest.fixture(scope="module")
+def card_db(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    from cardscene import photo
+
+    path = tmp_path_factory.mktemp("cards") / "objects.db"
+    with ObjectDatabase.create(path) as db:
+        for name in CARDS:
+            db.add_object(name, [photo(name, (240, 240))])
+    return path
 
 
 def _write_pair(
@@ -53,14 +84,15 @@ def _write_pair(
 
 
 @pytest.mark.parametrize("size", [(W, H), (2 * W, 2 * H)])
-def test_points_are_those_of_the_uncropped_stereo_stage(
-    size: tuple[int, int], tmp_path: Path, capsys: pytest.CaptureFixture[str]
+def test_points_are_those_of_the_pipelines_stereo_stage(
+    size: tuple[int, int], tmp_path: Path, capsys: pytest.CaptureFixture[str], card_db: Path
 ) -> None:
     lp, rp, calib, rig = _write_pair(*card_pair(CARDS), size, tmp_path)
     ref = _reference(lp, rp, rig)
     assert len(ref["points"]) > 100
     got = _points(lp, rp, calib, capsys)
     assert got == ref
+    assert got == _described(lp, rp, rig, card_db)
     if size == (W, H):
         # One path: the command's points are describe's (colour images), which for this pair
         # differ from those of the files read as gray (libpng's conversion rounds otherwise).
@@ -109,6 +141,26 @@ def _check_real(
     lp, rp, calib, rig = _write_pair(*_real_pair(real_data, name), size, tmp_path)
     ref = _reference(lp, rp, rig)
     assert _points(lp, rp, calib, capsys) == ref, (name, size, len(ref["points"]))
+
+
+def test_points_are_describes_on_a_generated_and_a_real_scene(
+    rendered: list[Path],
+    real_data: Path,
+    card_db: Path,
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """The whole of ``describe_scene`` (its threads, BLAS single-threaded) finds the points of
+    the command: on a scene of the generator and on the real Art pair (640×480)."""
+    folder = rendered[0]
+    left, right, calib = folder / "left.png", folder / "right.png", folder / "calib.json"
+    got = _points(left, right, calib, capsys)
+    assert len(got["points"]) > 20
+    assert got == _described(left, right, read_calibration(calib), card_db)
+    lp, rp, calib, rig = _write_pair(*_real_pair(real_data, "middeval2/Art"), (640, 480), tmp_path)
+    got = _points(lp, rp, calib, capsys)
+    assert len(got["points"]) > 100
+    assert got == _described(lp, rp, rig, card_db)
 
 
 @pytest.mark.parametrize("name", SAMPLE)

@@ -98,37 +98,39 @@ def points_cmd(o: PointsCommand) -> None:
 def _stereo_points(
     stereo: Any, left: Any, right: Any, rig: Any, *, ratio: float, sources: tuple[Path, Path]
 ) -> Any:
-    """The stereo stage with SIFT of both images at once; the dense check over the whole image.
+    """The pipeline's stereo stage, as ``describe`` runs it: SIFT of both images at once, then
+    ``stereo_points`` with the pipeline's :class:`~scenespeak.perception.stage_options.
+    StereoOptions` (the dense check cropped to the matches plus ``DENSE_MARGIN`` = 16 px).
 
-    OpenCV releases the GIL in SIFT, so the right image's extraction runs in a second thread
-    while this one does the left's: the points are those of the plain
-    ``stereo_points(left, right, rig)`` by construction (``tests/cli/test_points_fast.py``).
-    The dense SGBM check is NOT cropped to the matches as ``describe`` crops it
-    (``PipelineOptions.dense_crop``): SGBM's semi-global path costs carry influence along whole
-    rows and columns, so a cropped map differs from the whole image's in thousands of pixels at
-    any margin, and the matches it keeps in about one of seventy on rendered scenes, at 16 px
-    as at 150 px (``benchmarks/bench_points.py`` shows the time and the points of both).
+    One path for both commands (issue 10): the points are ``describe_scene(...).points`` bit
+    for bit (``tests/cli/test_points_fast.py``). OpenCV releases the GIL in SIFT, so the right
+    image's extraction runs in a second thread while this one does the left's; BLAS runs
+    single-threaded as in the pipeline. Before issue 16 the command checked the matches
+    against a dense map of the whole image; SGBM's path costs carry influence along whole
+    rows, so the crop gives a few different points on some pairs (``docs/cli.md`` gives the
+    count on every real pair at three sizes, and the accuracy against the ground truth).
     """
     from concurrent.futures import ThreadPoolExecutor
 
+    from scenespeak.perception.blas import single_threaded_blas
     from scenespeak.perception.features import detect, to_gray
+    from scenespeak.perception.stage_options import StereoOptions
 
     names = (str(sources[0]), str(sources[1]))
     stereo.check_pair(left, right, rig, left_name=names[0], right_name=names[1])
-    with ThreadPoolExecutor(max_workers=1) as pool:
+    with single_threaded_blas(), ThreadPoolExecutor(max_workers=1) as pool:
         future = pool.submit(detect, to_gray(right), precise_upscale=False)
         features_left = detect(to_gray(left), precise_upscale=False)
         features_right = future.result()
-    result = stereo.stereo_points(
-        left,
-        right,
-        rig,
-        ratio=ratio,
-        features_left=features_left,
-        features_right=features_right,
-        left_name=names[0],
-        right_name=names[1],
-        dense_crop=False,
-        min_points=1,
-    )
+        result = stereo.stereo_points(
+            left,
+            right,
+            rig,
+            features_left=features_left,
+            features_right=features_right,
+            left_name=names[0],
+            right_name=names[1],
+            min_points=1,
+            **StereoOptions(ratio=ratio).keywords(),
+        )
     return result.points
