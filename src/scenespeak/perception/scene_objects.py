@@ -19,6 +19,7 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING
 
 import cv2
 import numpy as np
@@ -36,7 +37,10 @@ from scenespeak.perception.objects import (
 from scenespeak.perception.recognition.results import Labelling
 from scenespeak.perception.stereo import StereoResult
 
-__all__ = ["StrategyOptions", "outline_mask", "points_inside", "scene_objects"]
+if TYPE_CHECKING:
+    from scenespeak.perception.scene_regions import SceneGeometry
+
+__all__ = ["StrategyOptions", "geometry_for", "outline_mask", "points_inside", "scene_objects"]
 
 
 @dataclass(frozen=True)
@@ -85,6 +89,7 @@ def scene_objects(
     id_to_label: Mapping[int, str],
     strategy: StrategyOptions,
     objects: ObjectOptions,
+    geometry: SceneGeometry | None = None,
 ) -> tuple[tuple[SceneObject, ...], list[Skipped]]:
     """The scene's objects by the strategy of ``strategy`` (module docstring).
 
@@ -101,12 +106,33 @@ def scene_objects(
         Database object id → label (geometry first's keypoint votes; empty: no votes).
     strategy, objects : StrategyOptions, ObjectOptions
         Where the points come from; how an object is made of them.
+    geometry : SceneGeometry, optional
+        Geometry first's support plane and segments, when already computed
+        (:func:`geometry_for`); None: computed here when the strategy uses them.
     """
     shape = images[0].shape[:2]
     resampled = bool(result.rect.needs_resampling)
     if strategy.uses_geometry(dense_map=result.dense is not None, resampled=resampled):
-        return _geometry_objects((shape[0], shape[1]), result, labelling, objects, id_to_label)
+        return _geometry_objects(
+            (shape[0], shape[1]), result, labelling, objects, id_to_label, geometry
+        )
     return _outline_objects(images, result, labelling, strategy, objects)
+
+
+def geometry_for(
+    shape: tuple[int, int], result: StereoResult, strategy: StrategyOptions
+) -> SceneGeometry | None:
+    """The support plane and segments :func:`scene_objects` will use with this strategy (None
+    when it uses none): they need the stereo stage only, not the labels, so the pipeline
+    computes them in its stereo thread while this one labels (the same call as
+    :func:`scenespeak.perception.scene_regions.objects_from_regions` makes)."""
+    resampled = bool(result.rect.needs_resampling)
+    if result.dense is None or not strategy.uses_geometry(dense_map=True, resampled=resampled):
+        return None
+    from scenespeak.perception.scene_regions import RegionStageOptions, scene_geometry
+
+    up = np.asarray(result.rect.rig.up, dtype=np.float64)
+    return scene_geometry(result.dense, up, (shape[0], shape[1]), RegionStageOptions().regions)
 
 
 def _geometry_objects(
@@ -115,13 +141,16 @@ def _geometry_objects(
     labelling: Labelling,
     o: ObjectOptions,
     id_to_label: Mapping[int, str],
+    geometry: SceneGeometry | None = None,
 ) -> tuple[tuple[SceneObject, ...], list[Skipped]]:
     """Geometry first (``perception.scene_regions``): named segments, votes, unknown segments."""
     from scenespeak.perception.scene_regions import SceneInputs, objects_from_regions
 
     xy = np.asarray(result.features_left.xy, dtype=np.float64)
     up = np.asarray(result.rect.rig.up, dtype=np.float64)
-    inputs = SceneInputs(shape, result.dense, result.points, labelling, xy, up, dict(id_to_label))
+    inputs = SceneInputs(
+        shape, result.dense, result.points, labelling, xy, up, dict(id_to_label), geometry
+    )
     # the outlier radius is scaled to each object (objects.scaled_radius), not o.radius
     kw = {"outliers": o.outliers, "eps": o.eps, "min_points": o.min_points}
     objs, skipped, _geo = objects_from_regions(inputs, object_options=kw)

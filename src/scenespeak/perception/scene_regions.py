@@ -235,6 +235,10 @@ class SceneInputs:
     id_to_label : dict
         Database object id -> label (for the keypoint votes of :func:`vote_segments`; empty:
         no votes).
+    geometry : SceneGeometry or None
+        The scene's geometry when already computed, by :func:`scene_geometry` of ``dense``,
+        ``up``, ``shape`` and the options' ``regions`` (it needs no labels: the pipeline
+        computes it in its stereo thread while the labelling runs); None: computed here.
     """
 
     shape: tuple[int, int]
@@ -244,6 +248,7 @@ class SceneInputs:
     keypoints_xy: NDArray[np.float64]
     up: NDArray[np.float64]
     id_to_label: dict[int, str] = field(default_factory=dict)
+    geometry: SceneGeometry | None = None
 
 
 @dataclass
@@ -282,11 +287,9 @@ def objects_from_regions(
     opts = options or RegionStageOptions()
     inp = dataclasses.replace(inputs, up=np.asarray(inputs.up, dtype=np.float64))
     dets = list(inp.labelling.detections)
-    geo = (
-        scene_geometry(inp.dense, inp.up, inp.shape, opts.regions)
-        if inp.dense is not None
-        else None
-    )
+    geo = inp.geometry
+    if geo is None and inp.dense is not None:
+        geo = scene_geometry(inp.dense, inp.up, inp.shape, opts.regions)
     seg_of = (
         name_segments(
             geo.segments, [inp.keypoints_xy[np.asarray(d.inliers, np.intp)] for d in dets]
