@@ -41,7 +41,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable, Iterator, Mapping
-from concurrent.futures import Future, ThreadPoolExecutor
+from concurrent.futures import Executor, Future, ThreadPoolExecutor
 from contextlib import contextmanager
 from dataclasses import dataclass, replace
 from os import PathLike
@@ -58,8 +58,9 @@ from scenespeak.perception.features import Features, detect, to_gray
 from scenespeak.perception.objects import ObjectOptions, SceneObject
 from scenespeak.perception.recognition.options import LabelOptions
 from scenespeak.perception.recognition.results import Labelling
-from scenespeak.perception.scene_objects import StrategyOptions, scene_objects
+from scenespeak.perception.scene_objects import StrategyOptions, geometry_for, scene_objects
 from scenespeak.perception.scene_objects import outline_mask as _outline_mask  # noqa: F401  (pipeline_rgbd)
+from scenespeak.perception.scene_regions import SceneGeometry
 from scenespeak.perception.stage_options import StereoOptions
 from scenespeak.perception.stereo import StereoResult
 from scenespeak.spatial.options import RelationOptions
@@ -228,14 +229,8 @@ def _relate_all(objects: tuple[SceneObject, ...], directions: int) -> list[PairR
     return relations
 
 
-class _InlineExecutor:
+class _InlineExecutor(Executor):
     """``ThreadPoolExecutor``'s ``submit`` run at once in the calling thread (``threads=1``)."""
-
-    def __enter__(self) -> _InlineExecutor:
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        return None
 
     def submit(self, fn: Callable[..., Any], /, *args: Any, **kwargs: Any) -> Future[Any]:
         """Run ``fn(*args, **kwargs)`` now; its result (or exception) in a finished future."""
@@ -318,11 +313,18 @@ def describe_scene(
         feats_l = detect(to_gray(left), precise_upscale=False)
         timings["sift"] = time.perf_counter() - t0
         future_st = pool.submit(
-            _stereo_stage, left, right, rig, opts.stereo, feats_l, future_r, (lname, rname), timings
+            _stereo_stage,
+            (left, right, rig),
+            (opts.stereo, opts.strategy),
+            feats_l,
+            future_r,
+            (lname, rname),
+            timings,
         )
         with _timed(timings, "label"):
-            # with the image, the finer search looks again where matches explain nothing
-            labelling: Labelling = db.label(feats_l, opts.labels, image=left)
+            # with the image, the finer search looks again where matches explain nothing; its
+            # boxes are shared with the stereo thread once that is done (same result)
+            labelling: Labelling = db.label(feats_l, opts.labels, image=left, executor=pool)
         say("stereo")
         with _timed(timings, "wait"):
             stage: StereoStage = future_st.result()
@@ -342,10 +344,15 @@ class StereoStage:
     result : StereoResult
         Matches, triangulated points, rectification and the dense map
         (:func:`scenespeak.perception.stereo.stereo_points`).
+    geometry : SceneGeometry or None
+        Geometry first's support plane and segments
+        (:func:`scenespeak.perception.scene_objects.geometry_for`: they need no labels, so
+        this thread makes them while the other labels); None when the strategy uses none.
     """
 
     features_right: Features
     result: StereoResult
+    geometry: SceneGeometry | None = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -360,18 +367,18 @@ class _EarlyStages:
 
 
 def _stereo_stage(
-    left: NDArray[np.generic],
-    right: NDArray[np.generic],
-    rig: Any,
-    opts: StereoOptions,
+    pair: tuple[NDArray[np.generic], NDArray[np.generic], Any],
+    opts: tuple[StereoOptions, StrategyOptions],
     feats_l: Features,
     future_r: Future[Features],
     names: tuple[str, str],
     timings: dict[str, float],
 ) -> StereoStage:
-    """The right image's features (from ``future_r``), then the stereo stage (worker thread)."""
+    """The right image's features (from ``future_r``), then the stereo stage and the scene's
+    geometry (worker thread)."""
     from scenespeak.perception import stereo
 
+    left, right, rig = pair
     feats_r = future_r.result()
     with _timed(timings, "stereo"):
         result = stereo.stereo_points(
@@ -382,9 +389,13 @@ def _stereo_stage(
             features_right=feats_r,
             left_name=names[0],
             right_name=names[1],
-            **opts.keywords(),
+            **opts[0].keywords(),
         )
-    return StereoStage(feats_r, result)
+    geometry = None
+    if len(result.points.xyz):  # else the chain stops with _no_matches_error
+        with _timed(timings, "geometry"):
+            geometry = geometry_for((left.shape[0], left.shape[1]), result, opts[1])
+    return StereoStage(feats_r, result, geometry)
 
 
 def _no_matches_error(src: Mapping[str, str], rig: Any, n_left: int, n_right: int) -> Exception:
@@ -427,7 +438,13 @@ def _after_stereo(
     say("objects")
     with _timed(timings, "objects"):
         objects, skipped = scene_objects(
-            early.images, result, early.labelling, early.id_to_label, opts.strategy, opts.objects
+            early.images,
+            result,
+            early.labelling,
+            early.id_to_label,
+            opts.strategy,
+            opts.objects,
+            early.stereo.geometry,
         )
 
     say("relations")

@@ -13,11 +13,21 @@ detection of the same label already made.
 The found detection's ``inliers`` are the *scene's* keypoints inside its carried outline (its
 verified inliers are keypoints of the enlarged crop, which the rest of the pipeline does not
 hold); its ``score`` and ``matches`` are those of the crop.
+
+Each box's look (its SIFT and its labelling) depends on nothing but the box, so the boxes can
+be shared with another thread (:func:`run_shared`, ``executor=``): the pipeline hands them to
+its stereo thread once that thread's own work is done. Only the merging of what the boxes
+found depends on the order, and it runs afterwards, box by box in the same order, so the
+result is the same whichever thread looked at which box.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import threading
+from collections.abc import Callable, Sequence
+from concurrent.futures import Executor
+from typing import TypeVar
 
 import cv2
 import numpy as np
@@ -33,7 +43,49 @@ from scenespeak.perception.recognition.label import (
 from scenespeak.perception.recognition.options import LabelOptions
 from scenespeak.perception.recognition.results import Detection, Labelling
 
-__all__ = ["finer_search", "merge_boxes"]
+__all__ = ["finer_search", "merge_boxes", "run_shared"]
+
+T = TypeVar("T")
+
+
+def run_shared(jobs: Sequence[Callable[[], T]], executor: Executor | None = None) -> list[T]:
+    """The results of ``jobs``, run in order by this thread and by one task of ``executor``.
+
+    Both threads take the next job not yet taken until none is left, so the work is shared
+    when the executor's thread is free and done here alone when it is busy (a task still
+    queued when this thread has finished is cancelled). Each job's result goes to its own
+    place: the list is the same whichever thread ran which job. An exception in a job is
+    raised here, after the other thread has stopped (no job is started after it).
+
+    >>> from concurrent.futures import ThreadPoolExecutor
+    >>> with ThreadPoolExecutor(1) as pool:
+    ...     run_shared([lambda i=i: i * i for i in range(6)], pool)
+    [0, 1, 4, 9, 16, 25]
+    """
+    results: list[T | None] = [None] * len(jobs)
+    lock = threading.Lock()
+    order = iter(range(len(jobs)))
+    failed = threading.Event()
+
+    def drain() -> None:
+        while not failed.is_set():
+            with lock:
+                i = next(order, None)
+            if i is None:
+                return
+            try:
+                results[i] = jobs[i]()
+            except BaseException:
+                failed.set()
+                raise
+
+    helper = executor.submit(drain) if executor is not None and len(jobs) > 1 else None
+    try:
+        drain()
+    finally:
+        if helper is not None and not helper.cancel():
+            helper.result()
+    return results  # type: ignore[return-value]  # every place was filled (or we raised)
 
 
 def merge_boxes(boxes: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -145,12 +197,23 @@ def _new_detection(
     return new
 
 
+def _look(
+    db: _Loaded, gray: NDArray[np.uint8], box: NDArray[np.float64], o: LabelOptions
+) -> tuple[Features, Labelling] | None:
+    """One box's look: the enlarged crop's features and their labelling (None: no keypoint)."""
+    crop = _crop_features(gray, box, o)
+    if not len(crop):
+        return None
+    return crop, label_features(db, crop, o)
+
+
 def finer_search(
     db: _Loaded,
     image: NDArray[np.generic],
     features: Features,
     labelling: Labelling,
     o: LabelOptions,
+    executor: Executor | None = None,
 ) -> Labelling:
     """``labelling`` with the detections found by a second, enlarged look where keypoints
     passed the ratio test but explain no detection (see the module docstring).
@@ -165,6 +228,9 @@ def finer_search(
         Its features and their labelling by :func:`label_features`.
     o : LabelOptions
         ``finer_*`` fields: the enlargement, contrast threshold, box padding, box limits.
+    executor : Executor, optional
+        Shares the boxes' looks with one task of it (:func:`run_shared`); the result is the
+        same with it and without it.
     """
     if o.finer_upscale <= 1.0 or not len(features):
         return labelling
@@ -172,11 +238,13 @@ def finer_search(
     found = list(labelling.detections)
     by_label = {v: k for k, v in db.labels.items()}
     added: list[Detection] = []
-    for box in _boxes(features, labelling, gray.shape[:2], o):
-        crop = _crop_features(gray, box, o)
-        if not len(crop):
+    boxes = _boxes(features, labelling, gray.shape[:2], o)
+    looks = run_shared([lambda b=b: _look(db, gray, b, o) for b in boxes], executor)
+    for look in looks:
+        if look is None:
             continue
-        for det in label_features(db, crop, o).detections:
+        crop, crop_labelling = look
+        for det in crop_labelling.detections:
             lone = (labelling.labels < 0) & (labelling.matched == by_label.get(det.label, -2))
             new = _new_detection(det, crop, features, found, lone, o)
             if new is not None and len(new.inliers):

@@ -5,6 +5,7 @@ from __future__ import annotations
 import contextlib
 import sqlite3
 from collections.abc import Callable, Iterator, Sequence
+from concurrent.futures import Executor
 from os import PathLike
 from pathlib import Path
 from types import TracebackType
@@ -459,6 +460,7 @@ class ObjectDatabase:
         options: LabelOptions | None = None,
         *,
         image: NDArray[np.generic] | None = None,
+        executor: Executor | None = None,
         **overrides: float,
     ) -> Labelling:
         """Label query keypoints (of the scene's left image) with the database's objects.
@@ -473,6 +475,10 @@ class ObjectDatabase:
             The image ``features`` come from: with it, a finer search (enlarged boxes round
             the matches that explain no detection, ``LabelOptions.finer_*``) also finds
             small and far objects (:func:`~scenespeak.perception.recognition.finer.finer_search`).
+        executor : Executor, optional
+            With ``image``: another thread to share the finer search's boxes with (each box
+            is looked at by whichever thread is free first; the result is the same without
+            it). The pipeline passes its stereo thread.
         **overrides
             Single fields of :class:`LabelOptions` (``min_inliers=5``, ``small_area=0``, ...).
 
@@ -495,7 +501,7 @@ class ObjectDatabase:
             return labelling
         from scenespeak.perception.recognition.finer import finer_search
 
-        return finer_search(self._loaded, image, features, labelling, opts)
+        return finer_search(self._loaded, image, features, labelling, opts, executor)
 
 
 def _check_magic(p: Path) -> None:
