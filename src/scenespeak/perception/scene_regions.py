@@ -168,7 +168,13 @@ def _outline_mask(outline: NDArray[np.float64], shape: tuple[int, int], grow: fl
         r = round(grow * max(x1 - x0, y1 - y0, 1.0))
         if r > 0:
             disc = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (2 * r + 1, 2 * r + 1))
-            mask = np.asarray(cv2.dilate(mask, disc), np.uint8)
+            # Only the filled pixels' box grown by r can change, and outside it every pixel
+            # is 0 as the image border is to a dilation: the same mask as dilating it whole.
+            bx, by, bw, bh = cv2.boundingRect(mask)
+            if bw > 0 and bh > 0:
+                y0, y1 = max(by - r, 0), min(by + bh + r, shape[0])
+                c0, c1 = max(bx - r, 0), min(bx + bw + r, shape[1])
+                mask[y0:y1, c0:c1] = cv2.dilate(np.ascontiguousarray(mask[y0:y1, c0:c1]), disc)
     return mask.astype(bool)
 
 
