@@ -278,7 +278,16 @@ def test_a_failing_labelling_is_raised_not_hung(
 
 def test_stage_timings_are_reported(card_db: Path) -> None:
     desc = _describe(NEAR, card_db)
-    assert set(desc.timings) == {"sift", "label", "stereo", "wait", "objects", "relations"}
+    # "geometry": the support plane and segments, made in the stereo thread (geometry first)
+    assert set(desc.timings) == {
+        "sift",
+        "label",
+        "stereo",
+        "geometry",
+        "wait",
+        "objects",
+        "relations",
+    }
     assert all(v >= 0.0 for v in desc.timings.values())
 
 
