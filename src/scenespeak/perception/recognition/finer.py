@@ -24,6 +24,7 @@ result is the same whichever thread looked at which box.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import threading
 from collections.abc import Callable, Sequence
 from concurrent.futures import Executor
@@ -239,7 +240,8 @@ def finer_search(
     by_label = {v: k for k, v in db.labels.items()}
     added: list[Detection] = []
     boxes = _boxes(features, labelling, gray.shape[:2], o)
-    looks = run_shared([lambda b=b: _look(db, gray, b, o) for b in boxes], executor)
+    jobs = [functools.partial(_look, db, gray, b, o) for b in boxes]
+    looks = run_shared(jobs, executor)
     for look in looks:
         if look is None:
             continue
