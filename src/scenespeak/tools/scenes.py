@@ -17,7 +17,6 @@ from __future__ import annotations
 import json
 import os
 import shutil
-import tempfile
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from os import PathLike
@@ -30,6 +29,7 @@ from numpy.typing import NDArray
 
 from scenespeak.errors import InputError
 from scenespeak.perception.calibration import ground_basis
+from scenespeak.tools.folders import folder_in_place
 from scenespeak.tools.render import (
     downsample_depth,
     downsample_labels,
@@ -248,9 +248,7 @@ def generate_scene(
     )
     truth = _truth_dict(placed, rig, seg_l)
     rgbd = _rgbd_files(placed, rig, seg_l, z_l, truth, seed if depth_noise else None)
-    scene_dir.parent.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(prefix=f".{scene_dir.name}-", dir=scene_dir.parent))
-    try:
+    with folder_in_place(scene_dir) as tmp:
         _write_rgb(tmp / "left.png", img_l)
         _write_rgb(tmp / "right.png", img_r)
         cv2.imwrite(
@@ -263,14 +261,6 @@ def generate_scene(
                 cv2.imwrite(str(tmp / name), data)
             else:
                 _dump(tmp / name, data)
-        # mkdtemp makes the folder private (0700); a scene is ordinary output, readable by all
-        tmp.chmod(0o755)
-        if scene_dir.exists():
-            shutil.rmtree(scene_dir)
-        os.replace(tmp, scene_dir)
-    except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
-        raise
     return scene_dir
 
 

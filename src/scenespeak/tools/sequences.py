@@ -41,8 +41,6 @@ frame they happen at (``docs/live.md`` gives the rule of each kind):
 from __future__ import annotations
 
 import json
-import os
-import shutil
 import tempfile
 from collections.abc import Callable, Sequence
 from os import PathLike
@@ -54,6 +52,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from scenespeak.errors import InputError
+from scenespeak.tools.folders import folder_in_place
 from scenespeak.tools.render import Camera, MeshSpec, capture, load_bodies
 from scenespeak.tools.scenes import (
     CATALOGUE,
@@ -323,9 +322,7 @@ def generate_sequence(
     objects = [pl.obj for pl in full if pl is not None]
     labels = [o.label for o in objects]
     rig = Rig(0.0, 0.25, 0.12, 60.0, (int(image_size[0]), int(image_size[1])))
-    out.parent.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(prefix=f".{out.name}-", dir=out.parent))
-    try:
+    with folder_in_place(out) as tmp:
         frames = _render_all(tmp, shots, objects, rig, labels, progress)
         events = sorted(_relation_events(frames) + _object_events(frames), key=lambda e: e["frame"])
         data = {
@@ -341,13 +338,6 @@ def generate_sequence(
         (tmp / "calib.json").write_text(json.dumps(rig.calibration(), indent=1) + "\n")
         (tmp / "intrinsics.json").write_text(json.dumps(_intrinsics(rig), indent=1) + "\n")
         (tmp / "truth.json").write_text(json.dumps(data, indent=1) + "\n")
-        tmp.chmod(0o755)
-        if out.exists():
-            shutil.rmtree(out)
-        os.replace(tmp, out)
-    except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
-        raise
     return load_sequence(out)
 
 
