@@ -16,6 +16,7 @@ Run::
 
     python benchmarks/bench_masks.py --set tuning --tolerances 0.25,0.5,1,2
     python benchmarks/bench_masks.py --set validation --rule        # the figures in the docs
+    python benchmarks/bench_masks.py --figure docs/img/mask_outline_rule.png   # the picture
 """
 
 from __future__ import annotations
@@ -152,6 +153,70 @@ def summary(rows: list[Row], settings: list[str]) -> None:
             )
 
 
+def figure(path: str) -> None:
+    """The picture of docs/forces.md: a tuning-set pair, its traced and simplified outlines,
+    and F2 with either outline (the rule's error as a curve)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from matplotlib.figure import Figure
+
+    from scenespeak.spatial.forces import prepare
+
+    pair = next(p for p in mask_pairs(TUNING_SEED, sizes=(512,)) if p.name == "field-512-0")
+    fig = Figure(figsize=(11, 4.2), dpi=110)
+    ax_mask, ax_zoom, ax_hist = fig.subplots(1, 3, width_ratios=[1, 1, 1.5])
+    outlines = {
+        (name, tol): prepare(mask, name, mask_tolerance=tol)
+        for mask, name in ((pair.a, "A"), (pair.b, "B"))
+        for tol in (0.0, None)
+    }
+    styles = {0.0: {"color": "C0", "lw": 2.2}, None: {"color": "C3", "lw": 1.0}}
+    for ax in (ax_mask, ax_zoom):
+        ax.imshow(pair.a | pair.b, cmap="Greys", vmin=0, vmax=2.5, interpolation="nearest")
+        for (_, tol), region in outlines.items():
+            x = np.column_stack([region.start[:, 0], region.end[:, 0]]).T
+            y = -np.column_stack([region.start[:, 1], region.end[:, 1]]).T
+            ax.plot(x, y, **styles[tol])  # type: ignore[arg-type]
+        ax.set_xticks([])
+        ax.set_yticks([])
+    for name, mask in (("A", pair.a), ("B", pair.b)):
+        rows, cols = np.nonzero(mask)
+        ax_mask.text(cols.mean(), rows.mean(), name, fontsize=12, ha="center", va="center")
+    ruled = outlines[("A", None)].start
+    ax_zoom.plot(ruled[:, 0], -ruled[:, 1], "o", color="C3", ms=3)
+    # zoom on A's outline where it comes nearest B (what F2 weighs most)
+    rows_b, cols_b = np.nonzero(pair.b)
+    near = ruled[np.argmin(np.hypot(ruled[:, 0] - cols_b.mean(), -ruled[:, 1] - rows_b.mean()))]
+    ax_zoom.set_xlim(near[0] - 20, near[0] + 20)
+    ax_zoom.set_ylim(-near[1] + 20, -near[1] - 20)
+    n_exact = _vertices(pair, 0.0)
+    n_rule = _vertices(pair, None)
+    ax_mask.set_title(
+        f"traced outline ({n_exact} vertices, blue)\nthe rule's ({n_rule} vertices, red)",
+        fontsize=9,
+    )
+    ax_zoom.set_title("A where it comes nearest B (40 × 40 px)", fontsize=9)
+    exact = _hist(pair.a, pair.b, 0.0)[1]
+    rule = _hist(pair.a, pair.b, None)[1]
+    deg = np.arange(180) * 2.0
+    ax_hist.plot(deg, exact / exact.max(), color="0.3", lw=2.5, label="F2, traced outline")
+    ax_hist.plot(deg, rule / exact.max(), color="C3", lw=1.0, label="F2, rule")
+    err = peak_error(rule, exact)
+    ax_hist.plot(
+        deg, 20 * (rule - exact) / exact.max(), color="C0", lw=0.8, label="difference × 20"
+    )
+    ax_hist.set_xlabel("direction (degrees)")
+    ax_hist.set_title(
+        f"F2 of A with respect to B: max difference {100 * err:.2f} % of the peak",
+        fontsize=9,
+    )
+    ax_hist.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path)
+    print(f"wrote {path}")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--set", choices=("tuning", "validation"), default="validation")
@@ -161,8 +226,12 @@ def main() -> None:
     parser.add_argument("--per-kind", type=int, default=3)
     parser.add_argument("--repeat", type=int, default=3)
     parser.add_argument("--json", help="write every row to this file")
+    parser.add_argument("--figure", help="only draw the picture of docs/forces.md to this file")
     args = parser.parse_args()
     os.environ.setdefault("SCENESPEAK_NUMBA", "always")
+    if args.figure:
+        figure(args.figure)
+        return
     settings = [s for s in args.tolerances.split(",") if s] + ([RULE] if args.rule else [])
     seed = TUNING_SEED if args.set == "tuning" else VALIDATION_SEED
     sizes = tuple(int(s) for s in args.sizes.split(","))
