@@ -100,7 +100,8 @@ def relate_objects(
     )
     if len(polygons) < 2:
         return []
-    return _ordered_relations(scene_pairs(polygons, labels, directions), labels, extents, t)
+    with _collector_paused():
+        return _ordered_relations(scene_pairs(polygons, labels, directions), labels, extents, t)
 
 
 def _scene_labels(
@@ -184,9 +185,8 @@ def _ordered_relations(
     n = len(labels)
     forward: list[int] = (scene.first * (n - 1) + scene.second - 1).tolist()
     places = (forward, (scene.second * (n - 1) + scene.first).tolist())
-    with _collector_paused():
-        histograms = (list(scene.f0) + list(back0), list(scene.f2) + list(back2))
-        return _build(places, words, numbers, histograms, sentence_templates(decisions))
+    histograms = (list(scene.f0) + list(back0), list(scene.f2) + list(back2))
+    return _build(places, words, numbers, histograms, sentence_templates(decisions))
 
 
 def _half_turned(h: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -208,13 +208,17 @@ def _turned(x: NDArray[np.float64]) -> NDArray[np.float64]:
 
 @contextlib.contextmanager
 def _collector_paused() -> Iterator[None]:
-    """Pause Python's cycle collector while the results are built, then restore it.
+    """Pause Python's cycle collector while the pairs are related, then restore it.
 
-    The loop makes about five container objects per ordered pair (40,000 for 100 objects)
-    and no reference cycle, but every 700 of them would start a collection, and some of those
-    scan the whole heap: that took as long as the rest of :func:`relate_objects` on 100
-    objects (``benchmarks/bench_relate.py``). Nothing is left uncollected: the collector runs
-    again, as before, once the loop is done. If it was disabled, it stays disabled.
+    A call makes about five container objects per ordered pair (100,000 for 100 objects:
+    the results, and the lists their numbers come from) and no reference cycle, but every
+    700 of them would start a collection, every tenth of those a larger one, and some of
+    those scan the whole heap (everything the process holds, Numba's and NumPy's modules
+    included): that took as long as the rest of :func:`relate_objects` on 100 objects
+    (``benchmarks/bench_relate.py``). With the collector paused over the whole call (not
+    only the loop that builds the results) the lists made and freed inside it start none.
+    Nothing is left uncollected: the collector runs again, as before, once the call is
+    done. If it was disabled, it stays disabled.
     """
     enabled = gc.isenabled()
     gc.disable()
