@@ -26,6 +26,7 @@ from skimage import data
 from scenespeak.perception.calibration import StereoRig, rectify
 from scenespeak.perception.features import Features, detect, to_gray
 from scenespeak.perception.stereo import (
+    MatchOptions,
     _candidates,
     _select,
     _verify_dense,
@@ -114,21 +115,15 @@ def main() -> None:
     t_cand, cand = timed(
         lambda: _candidates(fl, fr, rect, 1.5, 0.0, None, need_global=False), args.repeat
     )
-    kw: dict[str, Any] = {
-        "band_px": 1.5,
-        "min_disparity": 0.0,
-        "max_disparity": None,
-        "mutual": True,
-    }
-    strict = _select(cand, fl, rect, search="band", ratio=0.6, **kw)
+    # the same band, disparity range and cross check as before, now one MatchOptions
+    opts = MatchOptions(band_px=1.5, min_disparity=0.0, max_disparity=None, mutual=True)
+    strict = _select(cand, fl, rect, "band", 0.6, opts)
     t_dense, dense = timed(
         lambda: dense_disparity(gl, gr, rect, keypoint_disparities=strict.disparity), args.repeat
     )
     t_sel, m = timed(
-        lambda: _select(cand, fl, rect, search="band", ratio=0.8, **kw).subset(
-            _verify_dense(
-                _select(cand, fl, rect, search="band", ratio=0.8, **kw), dense, 0.75, 1.0, 5
-            )
+        lambda: _select(cand, fl, rect, "band", 0.8, opts).subset(
+            _verify_dense(_select(cand, fl, rect, "band", 0.8, opts), dense, 0.75, 1.0, 5)
         ),
         args.repeat,
     )
