@@ -5,8 +5,10 @@ recognised detection its segment (the one holding most of its inlier keypoints),
 pixels whose depth agrees with the object's own keypoints (an occluder never lends its depth),
 removes outliers with a radius scaled to the object, and turns the segments no detection
 claims into unknown objects. A detection whose keypoints fall in no segment keeps its carried
-outline (minus the support and the far background), and with no dense points at all its
-keypoints.
+outline (minus the support and the far background) at its keypoints' stereo depth, and with no
+dense points at all its keypoints. A detection with no keypoint depth is placed only by a segment
+of its own; otherwise it is not placed (a :class:`Skipped` saying why), never at the depth of
+what stands in front of it.
 
 >>> RegionStageOptions().depth_margin
 0.1
@@ -33,6 +35,13 @@ from scenespeak.perception.regions import (
     point_map,
     segment,
     support_plane,
+)
+from scenespeak.perception.scene_unknown import (
+    even_sample,
+    name_instances,
+    near_same_label,
+    unknown_segments,
+    vote_segments,
 )
 
 __all__ = [
@@ -77,6 +86,11 @@ class RegionStageOptions:
         for an object not verified anywhere in the scene, ``min_votes_instance`` for another
         instance of one that was (on the tuning set 3-6 chance votes for one object landed on
         a plain distractor and on the sky, so an unverified object needs many).
+    lone_share, lone_gap : float
+        A detection with no keypoint depth and no segment holding its keypoints is placed by
+        the one unclaimed segment with at least ``lone_share`` of its pixels inside its
+        outline, when its keypoints lie within ``lone_gap`` pixels of it (median); otherwise
+        it is not placed (never at the depth of what stands in front of it).
     """
 
     regions: RegionOptions = field(default_factory=RegionOptions)
@@ -94,6 +108,8 @@ class RegionStageOptions:
     min_votes_instance: int = 4
     vote_share: float = 0.6
     vote_lead: float = 2.0
+    lone_share: float = 0.5
+    lone_gap: float = 12.0
 
 
 @dataclass(frozen=True, eq=False)
@@ -181,41 +197,53 @@ def _outline_mask(outline: NDArray[np.float64], shape: tuple[int, int], grow: fl
 def _agreeing(
     pts: NDArray[np.float64], kp: NDArray[np.float64], margin: float
 ) -> NDArray[np.float64]:
-    """Points whose depth agrees with the object's own keypoints (median ± spread + margin)."""
-    if len(kp) < 2 or not len(pts):
+    """Points whose depth agrees with the object's own keypoints (median ± spread + margin).
+
+    One keypoint is a depth too (spread 0: its depth ± ``margin``); with none every point is
+    kept, so the caller must hold other evidence that the region is the object's (a segment
+    of its own, :func:`_own_region`).
+
+    >>> pts = np.array([[0.0, 0, 0.8], [0, 0, 1.85], [0, 0, 1.9]])
+    >>> _agreeing(pts, np.array([[0.0, 0, 1.88]]), 0.1)[:, 2].tolist()
+    [1.85, 1.9]
+    """
+    if not len(kp) or not len(pts):
         return pts
     z = kp[:, 2]
     med = float(np.median(z))
-    spread = float(np.percentile(np.abs(z - med), 90))
+    spread = float(np.percentile(np.abs(z - med), 90)) if len(z) > 1 else 0.0
     keep = np.abs(pts[:, 2] - med) <= spread + margin
     return pts[keep]
 
 
-def _sample(pts: NDArray[np.float64], n: int, seed: int = 0) -> NDArray[np.float64]:
-    if len(pts) <= n:
-        return pts
-    rng = np.random.default_rng(seed)
-    return pts[np.sort(rng.choice(len(pts), size=n, replace=False))]
+def _region_for(work: _Work, det_idx: int) -> NDArray[np.bool_] | None:
+    """The pixels of detection ``det_idx``: its segment within its grown outline.
 
-
-def _region_for(
-    k: int,
-    det_idx: int,
-    owners: dict[int, list[int]],
-    outlines: list[NDArray[np.bool_]],
-    geo: SceneGeometry,
-    opts: RegionStageOptions,
-) -> NDArray[np.bool_] | None:
-    """The pixels of detection ``det_idx``: its segment within its grown outline; a segment
-    several detections share is split by their outlines."""
-    if k < 0:
+    A segment several detections share (the dense map joins a mug to the shoebox behind it)
+    is split where their outlines overlap: when both have keypoints with a stereo depth, each
+    pixel goes to the one whose keypoints' median depth is nearer to its own (the mug in front
+    keeps its pixels, the shoebox its own), otherwise to the better detection (detections come
+    best first)."""
+    k = work.seg_of[det_idx]
+    geo = work.geo
+    if k < 0 or geo is None:
         return None
-    seg = geo.segments.mask(k)
-    region = seg & outlines[det_idx]
-    for other in owners.get(k, []):
-        if other < det_idx:  # detections come best first: the better one keeps shared pixels
-            region &= ~outlines[other]
-    if int(region.sum()) < opts.min_region_pixels:
+    region = geo.segments.mask(k) & work.outlines[det_idx]
+    z = geo.points[..., 2]
+    depths = work.depths
+    mine = depths[det_idx]
+    for other in work.owners.get(k, []):
+        if other == det_idx:
+            continue
+        theirs = depths[other]
+        overlap = region & work.outlines[other]
+        if math.isfinite(mine) and math.isfinite(theirs):
+            with np.errstate(invalid="ignore"):
+                nearer = np.abs(z - theirs) < np.abs(z - mine)
+            region &= ~(overlap & nearer)
+        elif other < det_idx:
+            region &= ~overlap
+    if int(region.sum()) < work.opts.min_region_pixels:
         return None
     return region
 
@@ -268,7 +296,13 @@ class _Work:
     outlines: list[NDArray[np.bool_]]
     seg_of: list[int]
     owners: dict[int, list[int]]
+    own: list[NDArray[np.float64]]
     taken: list[NDArray[np.bool_]] = field(default_factory=list)
+
+    @property
+    def depths(self) -> list[float]:
+        """Median depth (Z) of each detection's own keypoints with a stereo depth (NaN: none)."""
+        return [float(np.median(p[:, 2])) if len(p) else math.nan for p in self.own]
 
 
 def objects_from_regions(
@@ -306,6 +340,9 @@ def objects_from_regions(
     owners: dict[int, list[int]] = {}
     for i, k in enumerate(seg_of):
         owners.setdefault(k, []).append(i)
+    xyz = np.asarray(inp.points.xyz, dtype=np.float64)
+    left_index = np.asarray(inp.points.left_index, dtype=np.intp)
+    own = [xyz[np.isin(left_index, np.asarray(d.inliers, np.intp))] for d in dets]
     work = _Work(
         inp,
         opts,
@@ -314,6 +351,7 @@ def objects_from_regions(
         [_outline_mask(d.outline_in_scene, inp.shape, opts.outline_grow) for d in dets],
         seg_of,
         owners,
+        own,
     )
     objects: list[SceneObject] = []
     skipped: list[Skipped] = []
@@ -324,10 +362,10 @@ def objects_from_regions(
         return objects, skipped, geo
     residual = _residual(geo, work.taken, opts)
     claimed = _voted_objects(work, residual, objects)
-    _name_instances(objects)
+    name_instances(objects)
     if opts.unknown:
-        objects += _unknown_segments(
-            geo, residual, inp.keypoints_xy, claimed, inp.up, opts, work.kw
+        objects += unknown_segments(
+            geo.points, residual, inp.keypoints_xy, claimed, inp.up, opts, work.kw
         )
     return objects, skipped, geo
 
@@ -336,30 +374,24 @@ def _known_object(work: _Work, i: int, det: Any) -> SceneObject | Skipped:
     """One detection: its segment (or outline) points agreeing with its keypoints' depth."""
     inp, opts, geo = work.inp, work.opts, work.geo
     name = getattr(det, "name", "") or det.label
-    inl = np.asarray(det.inliers, np.intp)
-    own_kp = np.asarray(inp.points.xyz, dtype=np.float64)[
-        np.isin(np.asarray(inp.points.left_index, dtype=np.intp), inl)
-    ]
+    own_kp = work.own[i]
     dense_pts = np.zeros((0, 3))
-    from_outline = False
+    region_note = None
     if geo is not None:
-        region = _region_for(work.seg_of[i], i, work.owners, work.outlines, geo, opts)
-        if region is None:  # no segment: the outline, above the support
-            region = _outline_mask(det.outline_in_scene, inp.shape, 0.0) & (
-                geo.segments.labels >= 0
-            )
-            from_outline = True
-        work.taken.append(region | (work.outlines[i] & (geo.segments.labels >= 0)))
+        placed = _own_region(work, i)
+        if isinstance(placed, str):
+            return Skipped(name, placed)
+        region, region_note = placed
         dense_pts = geo.points[region].astype(np.float64)
         dense_pts = dense_pts[np.all(np.isfinite(dense_pts), axis=1)]
-        dense_pts = _sample(_agreeing(dense_pts, own_kp, opts.depth_margin), opts.max_points)
+        dense_pts = even_sample(_agreeing(dense_pts, own_kp, opts.depth_margin), opts.max_points)
     note = None
     if len(dense_pts) >= opts.min_points:
         result = make_object(det.label, dense_pts, inp.up, source="dense", **work.kw)
     else:
         note = f"dense stereo gave {len(dense_pts)} points in its region, keypoints used"
         result = make_object(det.label, own_kp, inp.up, source="keypoints", **work.kw)
-        from_outline = False
+        region_note = None
     if isinstance(result, Skipped):
         reason = result.reason
         if not len(own_kp):
@@ -369,10 +401,85 @@ def _known_object(work: _Work, i: int, det: Any) -> SceneObject | Skipped:
             )
         return Skipped(name, f"{reason}; {note}" if note else reason)
     notes = (*result.notes, note) if note else result.notes
-    if from_outline:
-        notes = (*notes, "no segment held its keypoints: points from its outline")
+    if region_note:
+        notes = (*notes, region_note)
     conf = detection_confidence(int(det.score))
     return dataclasses.replace(result, name=name, confidence=conf, notes=tuple(notes))
+
+
+def _own_region(work: _Work, i: int) -> tuple[NDArray[np.bool_], str | None] | str:
+    """The pixels that place detection ``i`` and a note on where they came from, or why it is
+    not placed.
+
+    The depth of a region must come from the object itself: its keypoints with a stereo depth
+    (:func:`_agreeing` keeps the region's points at their depth), or, without any, a segment
+    of its own — the one holding its keypoints when no other detection shares it, or the one
+    segment no other detection claims that lies mostly inside its outline, next to its
+    keypoints (:func:`_lone_segment`). Without either, the carried outline or a shared segment
+    holds whatever stands in front of the object: on the generated default set three far
+    objects (1.9 m) seen with 3-5 keypoints and no stereo depth were placed at the depth of
+    the book or tin in front of them, 0.4-1.2 m too near. Such an object is not placed rather
+    than placed on its occluder.
+    """
+    geo = work.geo
+    assert geo is not None
+    det = work.inp.labelling.detections[i]
+    above = geo.segments.labels >= 0
+    region = _region_for(work, i)
+    work.taken.append(
+        (work.outlines[i] & above) if region is None else region | (work.outlines[i] & above)
+    )
+    has_depth = len(work.own[i]) > 0
+    if region is not None and (has_depth or len(work.owners.get(work.seg_of[i], [])) == 1):
+        return region, None
+    why = "their segment holds other objects"
+    if region is None:
+        outline = _outline_mask(det.outline_in_scene, work.inp.shape, 0.0) & above
+        if has_depth:
+            return outline, "no segment held its keypoints: points from its outline"
+        lone = _lone_segment(work, i, outline)
+        if lone is not None:
+            return lone, "no keypoint depth: placed by the one unclaimed segment in its outline"
+        why = "no segment of its own holds them"
+    return (
+        f"recognised in the left image ({len(det.inliers)} keypoints), but none of its keypoints "
+        f"has a stereo depth and {why}: not placed, so that what stands in front of it does "
+        "not lend it its depth"
+    )
+
+
+def _lone_segment(work: _Work, i: int, outline: NDArray[np.bool_]) -> NDArray[np.bool_] | None:
+    """The one segment that can be detection ``i``'s visible part, or None.
+
+    Candidates are the segments inside its (ungrown) carried outline that no other detection
+    claims and that have at least ``lone_share`` of their pixels inside it (an unrecognised
+    object in front of it reaches out of the outline); there must be exactly one, and its
+    keypoints must lie within ``lone_gap`` pixels of it (median)."""
+    geo, opts = work.geo, work.opts
+    assert geo is not None
+    labels = geo.segments.labels
+    inside = labels[outline]
+    ks, counts = np.unique(inside[inside >= 0], return_counts=True)
+    claimed = {k for k, v in work.owners.items() if any(j != i for j in v)}
+    cands = [
+        int(k)
+        for k, c in zip(ks.tolist(), counts.tolist(), strict=True)
+        if k not in claimed and c >= opts.lone_share * int(geo.segments.sizes[k])
+    ]
+    if len(cands) != 1:
+        return None
+    k = cands[0]
+    region = (labels == k) & outline
+    if int(region.sum()) < opts.min_region_pixels:
+        return None
+    dist = cv2.distanceTransform((labels != k).astype(np.uint8), cv2.DIST_L2, 3)
+    xy = work.inp.keypoints_xy[np.asarray(work.inp.labelling.detections[i].inliers, np.intp)]
+    h, w = labels.shape
+    c = np.clip(np.rint(xy[:, 0]).astype(np.intp), 0, w - 1)
+    r = np.clip(np.rint(xy[:, 1]).astype(np.intp), 0, h - 1)
+    if not len(xy) or float(np.median(dist[r, c])) > opts.lone_gap:
+        return None
+    return region
 
 
 def _residual(
@@ -401,9 +508,9 @@ def _voted_objects(work: _Work, residual: Segments, objects: list[SceneObject]) 
     )
     for k, label, n_votes in voted:
         pts = geo.points[residual.mask(k)].astype(np.float64)
-        pts = _sample(pts[np.all(np.isfinite(pts), axis=1)], opts.max_points)
+        pts = even_sample(pts[np.all(np.isfinite(pts), axis=1)], opts.max_points)
         result = make_object(label, pts, inp.up, source="segment", **work.kw)
-        if isinstance(result, SceneObject) and not _near_same_label(result, objects):
+        if isinstance(result, SceneObject) and not near_same_label(result, objects):
             claimed.add(k)
             note = f"named by {n_votes} keypoint votes (no geometric check passed)"
             objects.append(
@@ -415,115 +522,3 @@ def _voted_objects(work: _Work, residual: Segments, objects: list[SceneObject]) 
                 )
             )
     return claimed
-
-
-def _near_same_label(obj: SceneObject, objects: list[SceneObject], gap: float = 0.12) -> bool:
-    """Whether an object of the same label stands within ``gap`` metres (on the plane) of
-    ``obj``'s points: then ``obj`` is a piece of it, not a second instance."""
-    for o in objects:
-        if o.label != obj.label:
-            continue
-        d = np.linalg.norm(obj.plane_xy[:, None, :] - o.plane_xy[None, ::4, :], axis=2)
-        if float(d.min()) < gap:
-            return True
-    return False
-
-
-def _name_instances(objects: list[SceneObject]) -> None:
-    """Several objects of one label get distinct names: the label, "label 2", ..."""
-    seen: dict[str, int] = {}
-    for i, o in enumerate(objects):
-        seen[o.label] = seen.get(o.label, 0) + 1
-        if seen[o.label] > 1:
-            objects[i] = dataclasses.replace(o, name=f"{o.label} {seen[o.label]}")
-
-
-def vote_segments(
-    segments: Segments,
-    keypoints_xy: NDArray[np.float64],
-    matched: NDArray[np.integer],
-    id_to_label: dict[int, str],
-    claimed: set[int],
-    opts: RegionStageOptions,
-    verified: frozenset[str] = frozenset(),
-) -> list[tuple[int, str, int]]:
-    """Unclaimed segments named by the ratio-test votes of the keypoints inside them.
-
-    A segment is named after the object most of its keypoints matched (before any geometric
-    check) when that object has at least ``min_votes`` votes at distinct positions, at least
-    ``vote_share`` of the segment's matched keypoints, and at least ``vote_lead`` times the
-    runner-up's votes. Chance matches of a never-learnt object spread over many objects (at
-    most 2 votes for one object on the tuning set's distractors), a recognised-but-unverified
-    object concentrates them. Returns ``(segment, label, votes)``.
-    """
-    h, w = segments.labels.shape
-    xy = np.asarray(keypoints_xy, dtype=np.float64)
-    if not len(xy):
-        return []
-    c = np.clip(np.rint(xy[:, 0]).astype(np.intp), 0, w - 1)
-    r = np.clip(np.rint(xy[:, 1]).astype(np.intp), 0, h - 1)
-    seg_of_kp = segments.labels[r, c]
-    m = np.asarray(matched)
-    out: list[tuple[int, str, int]] = []
-    for k in range(len(segments.sizes)):
-        if k in claimed:
-            continue
-        sel = (seg_of_kp == k) & (m >= 0)
-        if not sel.any():
-            continue
-        ids = m[sel]
-        pos = np.round(xy[sel]).astype(np.int64)
-        distinct: dict[int, int] = {}
-        for oid in np.unique(ids):
-            distinct[int(oid)] = len({tuple(p) for p in pos[ids == oid]})
-        ranked = sorted(distinct.items(), key=lambda kv: -kv[1])
-        best, votes = ranked[0]
-        second = ranked[1][1] if len(ranked) > 1 else 0
-        if (
-            votes
-            >= (opts.min_votes_instance if id_to_label.get(best) in verified else opts.min_votes)
-            and votes >= opts.vote_share * sum(distinct.values())
-            and votes >= opts.vote_lead * second
-            and best in id_to_label
-        ):
-            out.append((k, id_to_label[best], votes))
-    return out
-
-
-def _unknown_segments(
-    geo: SceneGeometry,
-    segments: Segments,
-    keypoints_xy: NDArray[np.float64],
-    claimed: set[int],
-    up: NDArray[np.float64],
-    opts: RegionStageOptions,
-    kw: dict[str, Any],
-) -> list[SceneObject]:
-    """Segments no detection holds, as unknown objects (left to right)."""
-    out: list[tuple[float, SceneObject]] = []
-    h, w = segments.labels.shape
-    c = np.clip(np.rint(keypoints_xy[:, 0]).astype(np.intp), 0, w - 1)
-    r = np.clip(np.rint(keypoints_xy[:, 1]).astype(np.intp), 0, h - 1)
-    hit = segments.labels[r, c]
-    n_kp = np.bincount(hit[hit >= 0], minlength=len(segments.sizes))
-    for k, size in enumerate(segments.sizes.tolist()):
-        if k in claimed or size < opts.unknown_min_pixels or n_kp[k] < opts.unknown_min_keypoints:
-            continue
-        pts = geo.points[segments.mask(k)].astype(np.float64)
-        pts = pts[np.all(np.isfinite(pts), axis=1)]
-        if not len(pts):
-            continue
-        centre = np.median(pts, axis=0)
-        if float(np.linalg.norm(centre)) > opts.unknown_max_distance:
-            continue
-        ext = np.percentile(pts, 95, axis=0) - np.percentile(pts, 5, axis=0)
-        if float(np.max(ext)) > opts.unknown_max_extent:
-            continue
-        obj = make_object("unknown", _sample(pts, opts.max_points), up, source="segment", **kw)
-        if isinstance(obj, SceneObject):
-            out.append((float(obj.plane_centroid[0]), obj))
-    out.sort(key=lambda t: t[0])
-    return [
-        dataclasses.replace(o, label=f"unknown object {j}", name=f"unknown object {j}")
-        for j, (_x, o) in enumerate(out, 1)
-    ]
