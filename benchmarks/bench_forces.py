@@ -2,16 +2,19 @@
 
 Prints median wall-clock times (one process, one thread) of F0 + F2:
 
-* two convex 30-vertex polygons at 180 directions (target: <= 0.5 ms),
-* two non-convex (star-shaped) 200-vertex polygons at 180 directions,
-* two 512 x 512 boolean masks (Matsakis & Wendling's C raster code: ~53 ms per histogram),
+* two convex 30-vertex polygons at 180 directions (issue 16's target: <= 0.1 ms),
+* two non-convex (star-shaped) 200-vertex polygons at 180 directions (target: <= 2 ms),
+* two 512 x 512 boolean masks (target: <= 4 ms),
 * how the time scales with the vertex count and with the number of directions,
 * the 10 pairs of a 5-object scene (convex hulls of 8-22 vertices, as the pipeline makes):
   one ``force_histograms`` call per pair against one sweep for all pairs
   (``forces.prepare`` + ``forces.f0_f2_pairs``, what ``language.relate_objects`` uses).
 
 "F0+F2" is timed two ways: two calls of ``force_histogram`` (r=0, then r=2), and one call of
-``force_histograms`` (both exponents sharing the validation and the sweep).
+``force_histograms`` (both exponents sharing the validation and the sweep). Each timing is
+whole public calls on the raw arrays or masks: validation, preparation (tracing, the
+simplicity check), the contact test, the sweep and the check of the result are all inside;
+nothing is prepared outside the timed region.
 
 The machine may be shared: medians over many repeats are printed together with the load
 average, and should be read with it.

@@ -21,6 +21,12 @@ remembered earlier calls made ``serve`` and ``describe`` differ in the last digi
 histograms of a short command or of one stream frame cost what the reference costs; a scene of a
 hundred objects runs compiled.
 
+A cached function has its callees compiled into it, but Numba checks only the function's own
+source file before loading it: after an edit of ``_table.py`` the cached ``_sweep.sweep``
+would still be loaded, built against the old code (a stale cache can crash the process). So
+the kernel's functions are cached under a stamp of every source file of this package
+(:func:`_install_locator`): any edit here recompiles all of them once.
+
 ``SCENESPEAK_NUMBA=always`` loads Numba on the first histogram (benchmarks of the kernel);
 ``SCENESPEAK_NO_NUMBA=1`` (or ``SCENESPEAK_NUMBA=never``) never imports it.
 """
@@ -28,6 +34,7 @@ hundred objects runs compiled.
 from __future__ import annotations
 
 import functools
+import hashlib
 import importlib
 import importlib.util
 import os
@@ -116,11 +123,68 @@ def _fallback_cache_dir() -> str:
     return path
 
 
+@functools.cache
+def _package_stamp() -> bytes:
+    """SHA-256 of every source file of this package (``spatial/forces/*.py``)."""
+    here = os.path.dirname(os.path.abspath(__file__))
+    digest = hashlib.sha256()
+    for name in sorted(os.listdir(here)):
+        if name.endswith(".py"):
+            with open(os.path.join(here, name), "rb") as f:
+                digest.update(name.encode() + b"\0" + f.read())
+    return digest.digest()
+
+
+@functools.cache
+def _install_locator() -> None:
+    """Put a cache locator first in Numba's list that, for this package's files only, adds
+    :func:`_package_stamp` to Numba's own stamp of the function's file (same cache place)."""
+    from numba.core import caching
+
+    # CacheImpl was _CacheImpl before Numba 0.61.
+    impl = getattr(caching, "CacheImpl", None) or caching._CacheImpl  # type: ignore[attr-defined]
+    here = os.path.dirname(os.path.abspath(__file__))
+
+    class KernelLocator(caching._CacheLocator):
+        def __init__(self, inner: Any) -> None:
+            self._inner = inner
+            self._py_file = inner._py_file
+
+        def ensure_cache_path(self) -> None:
+            self._inner.ensure_cache_path()
+
+        def get_cache_path(self) -> Any:
+            return self._inner.get_cache_path()
+
+        def get_source_stamp(self) -> Any:
+            return (self._inner.get_source_stamp(), _package_stamp())
+
+        def get_disambiguator(self) -> Any:
+            return self._inner.get_disambiguator()
+
+        @classmethod
+        def from_function(cls, py_func: Any, py_file: str) -> Any:
+            if os.path.dirname(os.path.abspath(py_file)) != here:
+                return None
+            for other in impl._locator_classes:
+                if other is not cls:
+                    inner = other.from_function(py_func, py_file)
+                    if inner is not None:
+                        return cls(inner)
+            return None
+
+    impl._locator_classes.insert(0, KernelLocator)
+
+
 def jit(fn: F) -> F:
     """Compile ``fn`` with Numba (lazily, cached on disk); identity without Numba."""
     numba = _numba() if available() else None
     if numba is None:
         return fn
+    try:
+        _install_locator()
+    except Exception:  # a Numba without this internal API: its own stamps only
+        pass
     try:
         return numba.njit(cache=True, **_OPTIONS)(fn)
     except Exception:  # Numba raises RuntimeError when it has no cache directory

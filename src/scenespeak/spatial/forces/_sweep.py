@@ -30,6 +30,7 @@ from typing import TypeVar
 
 import numpy as np
 
+from scenespeak.spatial.forces._convex import project_chained, walk_convex
 from scenespeak.spatial.forces._jit import jit
 from scenespeak.spatial.forces._table import _tables
 
@@ -328,8 +329,31 @@ def _walk_f0_f2(
 
 
 @jit
+def _convex_pairs(
+    convex: np.ndarray, pair_a: np.ndarray, pair_b: np.ndarray, fast: bool
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Which pairs take the chain walk of :mod:`~scenespeak.spatial.forces._convex` (both
+    regions convex, F0 + F2), which regions need the sorted edge tables (in another pair)
+    and which the vertices' projections (in a chain walk)."""
+    both = np.zeros(pair_a.size, dtype=np.bool_)
+    table = np.zeros(convex.size, dtype=np.bool_)
+    chained = np.zeros(convex.size, dtype=np.bool_)
+    for p in range(pair_a.size):
+        ga = pair_a[p]
+        gb = pair_b[p]
+        both[p] = fast and convex[ga] and convex[gb]
+        if both[p]:
+            chained[ga] = True
+            chained[gb] = True
+        else:
+            table[ga] = True
+            table[gb] = True
+    return both, table, chained
+
+
+@jit
 def sweep(
-    regions: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+    regions: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray],
     pair_a: np.ndarray,
     pair_b: np.ndarray,
     y0: np.ndarray,
@@ -354,6 +378,9 @@ def sweep(
         Region g owns vertices ``region_start[g]:region_start[g + 1]``.
     origin : (G, 2) float
         Each region's origin (absolute coordinates).
+    convex : (G,) bool
+        Whether region g is one convex ring (its pairs with convex regions take the chain
+        walk of :mod:`~scenespeak.spatial.forces._convex` for F0 + F2).
     pair_a, pair_b : (P,) int
         The argument and referent region of each pair.
     y0 : (P,) float
@@ -366,7 +393,7 @@ def sweep(
         Histogram bins; with an even number only half are swept (``F(θ + π)`` from the
         same pairs through ``Φ⁺(-d)``); with an odd number the θ + π parts are dropped.
     """
-    pts, nxt, region_start, origin = regions
+    pts, nxt, region_start, origin, convex = regions
     codes, rs = kernels
     n_pairs = pair_a.size
     n_k = codes.size
@@ -382,11 +409,16 @@ def sweep(
     acc = np.empty((2, n_k))
     # F0 + F2 (what every caller of f0_f2_pairs and force_histograms() asks for): fused walk.
     fast = n_k == 2 and codes[0] == 0 and codes[1] == 1
+    chains, table, chained = _convex_pairs(convex, pair_a, pair_b, fast)
+    pv = np.empty(pts.shape[0])
+    ps = np.empty(pts.shape[0])
+    low_high = np.zeros((region_start.size - 1, 2), dtype=np.int64)
     for d in range(half):
         theta = 2.0 * math.pi * d / directions
         c = math.cos(theta)
         s = math.sin(theta)
-        _tables(c, s, pts, nxt, region_start, d == 0, (tab, perm, extent, srt, keys))
+        _tables(c, s, pts, nxt, region_start, d == 0, (tab, perm, extent, srt, keys), table)
+        project_chained(c, s, pts, region_start, chained, (pv, ps, low_high, extent))
         for p in range(n_pairs):
             ga = pair_a[p]
             gb = pair_b[p]
@@ -397,6 +429,20 @@ def sweep(
                 continue  # no line of this direction meets both objects
             a0, a1 = region_start[ga], region_start[ga + 1]
             b0, b1 = region_start[gb], region_start[gb + 1]
+            if chains[p]:
+                t0, t2, q0, q2 = walk_convex(
+                    pv,
+                    ps,
+                    (a0, a1, low_high[ga, 0], low_high[ga, 1]),
+                    (b0, b1, low_high[gb, 0], low_high[gb, 1]),
+                    (dvb, ox * c + oy * s),
+                )
+                out[p, 0, d] += t0
+                out[p, 1, d] += t2
+                if both:
+                    out[p, 0, d + half] += q0
+                    out[p, 1, d + half] += q2
+                continue
             if fast:
                 t0, t2, q0, q2 = _walk_f0_f2(srt, a0, a1, b0, b1, dvb, ox * c + oy * s)
                 out[p, 0, d] += t0

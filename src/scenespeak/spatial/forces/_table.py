@@ -202,6 +202,7 @@ def _tables(
     region_start: np.ndarray,
     first: bool,
     scratch: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+    needed: np.ndarray,
 ) -> None:
     """Every region's edge table for direction (c, s), each sorted by the edge's ``v_lo``.
 
@@ -210,9 +211,12 @@ def _tables(
     ``srt[j] = tab[perm[j]]`` (the rows in sorted order, contiguous), ``keys`` scratch.
     Regions of at most :data:`BUCKET_SORT_FROM` edges skip ``tab``: their rows are projected
     in the previous order and moved into place (:func:`_rows`, :func:`_insertion_rows`).
+    Regions with ``needed[g]`` False (only in convex chain walks) are left alone.
     """
     tab, perm, extent, srt, keys = scratch
     for g in range(region_start.size - 1):
+        if not needed[g]:
+            continue
         lo_g = region_start[g]
         hi_g = region_start[g + 1]
         if hi_g - lo_g <= BUCKET_SORT_FROM:  # small: rows projected in place, then moved

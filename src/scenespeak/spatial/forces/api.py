@@ -11,12 +11,13 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import TypeGuard
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from scenespeak.errors import InputError
-from scenespeak.spatial.forces import guards
+from scenespeak.spatial.forces import _jit, guards
 from scenespeak.spatial.forces.contact import _contact
 from scenespeak.spatial.forces.kernel import KernelSpec, sweep_pairs
 from scenespeak.spatial.forces.regions import DEFAULT_MASK_TOLERANCE as _MASK_TOLERANCE
@@ -140,6 +141,55 @@ def _check_defined(a: Region, b: Region, r: float) -> None:
         )
 
 
+def _direct(
+    argument: ArrayLike,
+    referent: ArrayLike,
+    exponents: list[float],
+    directions: int,
+    mask_tolerance: float | None,
+) -> FloatArray | None:
+    """:func:`force_histograms` of two float64 polygons in one compiled call
+    (:mod:`~scenespeak.spatial.forces._direct`), or None when the general path must run: other
+    input, the NumPy reference (``_jit``), or anything to report or handle."""
+    if not (_float_polygon(argument) and _float_polygon(referent)):
+        return None
+    if mask_tolerance is not None and not _plain_tolerance(mask_tolerance):
+        return None
+    if not _jit.wanted(1, directions * (len(argument) + len(referent))):
+        return None
+    from scenespeak.spatial.forces._direct import pair_histograms
+
+    kernels = [KernelSpec(x) for x in exponents]
+    codes = np.array([k.code for k in kernels], dtype=np.int64)
+    rs = np.array(exponents, dtype=np.float64)
+    status, out = pair_histograms(
+        np.ascontiguousarray(argument), np.ascontiguousarray(referent), (codes, rs), directions
+    )
+    return out if status == 0 else None
+
+
+def _float_polygon(obj: object) -> TypeGuard[FloatArray]:
+    """An ``(N, 2)`` float64 array within ``max_vertices`` (what the direct path takes)."""
+    from scenespeak import limits
+
+    return (
+        isinstance(obj, np.ndarray)
+        and obj.dtype == np.float64
+        and obj.ndim == 2
+        and obj.shape[1] == 2
+        and len(obj) <= limits.current().max_vertices
+    )
+
+
+def _plain_tolerance(value: object) -> bool:
+    """Whether ``guards.check_tolerance`` accepts ``value`` (it is not used for polygons)."""
+    try:
+        guards.check_tolerance(value)
+    except InputError:
+        return False
+    return True
+
+
 def force_histograms(
     argument: ArrayLike,
     referent: ArrayLike,
@@ -181,6 +231,9 @@ def force_histograms(
     exponents = [_check_r(x) for x in np.atleast_1d(np.asarray(r, dtype=object))]
     if not exponents:
         raise InputError("r", "give at least one exponent")
+    direct = _direct(argument, referent, exponents, directions, mask_tolerance)
+    if direct is not None:
+        return direct
     a_arr, b_arr, k = guards.normalise_pair(
         guards.as_vertices(argument, "argument"), guards.as_vertices(referent, "referent")
     )

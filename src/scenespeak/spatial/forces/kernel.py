@@ -86,15 +86,17 @@ def _reference(
 
 def _packed(
     regions: Sequence[Region],
-) -> tuple[FloatArray, NDArray[np.int64], NDArray[np.int64], FloatArray]:
-    """The regions' vertices end to end, each relative to its first vertex."""
+) -> tuple[FloatArray, NDArray[np.int64], NDArray[np.int64], FloatArray, NDArray[np.bool_]]:
+    """The regions' vertices end to end, each relative to its first vertex, and which regions
+    are convex."""
     sizes = np.array([len(r.start) for r in regions], dtype=np.int64)
     region_start = np.zeros(len(regions) + 1, dtype=np.int64)
     np.cumsum(sizes, out=region_start[1:])
     origin = np.array([r.start[0] for r in regions], dtype=np.float64).reshape(-1, 2)
     pts = np.concatenate([r.start for r in regions]) - np.repeat(origin, sizes, axis=0)
     nxt = np.concatenate([r.nxt + region_start[g] for g, r in enumerate(regions)])
-    return pts, nxt.astype(np.int64), region_start, origin
+    convex = np.array([r.convex for r in regions], dtype=np.bool_)
+    return pts, nxt.astype(np.int64), region_start, origin, convex
 
 
 def sweep_pairs(
