@@ -107,6 +107,42 @@ def test_kernel_matches_reference_on_overlapping_objects(
     assert_close(got, ref)
 
 
+def convex_polygon(rng: np.random.Generator, n: int, centre: Array, radius: float) -> Array:
+    """Vertices on an ellipse at sorted random angles (convex), either orientation."""
+    ang = np.sort(rng.uniform(0, 2 * np.pi, n))
+    if np.diff(np.concatenate([ang, ang[:1] + 2 * np.pi])).max() >= np.pi:
+        ang = 2 * np.pi * (np.arange(n) + 0.5 * rng.uniform(0, 1, n)) / n
+    p = np.column_stack([centre[0] + radius * np.cos(ang), centre[1] + 0.6 * radius * np.sin(ang)])
+    return p if rng.uniform() < 0.5 else p[::-1].copy()
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    seed=st.integers(0, 2**31),
+    n=st.integers(3, 40),
+    m=st.integers(3, 40),
+    directions=st.sampled_from([36, 90, 180, 181, 45]),
+)
+def test_convex_chain_walk_matches_reference(seed: int, n: int, m: int, directions: int) -> None:
+    """Two convex regions take the chain merge of ``_convex`` for F0 + F2: against the
+    reference, also with a region in the same call that needs the edge tables."""
+    rng = np.random.default_rng(seed)
+    a = forces.prepare(convex_polygon(rng, n, np.zeros(2), 1.0), "a")
+    angle = rng.uniform(0, 2 * np.pi)
+    gap = rng.uniform(2.1, 6.0)
+    b = forces.prepare(
+        convex_polygon(rng, m, gap * np.array([np.cos(angle), np.sin(angle)]), 1.0), "b"
+    )
+    c = forces.prepare(star(rng, 12, -gap * np.array([np.cos(angle), np.sin(angle)]), 1.0), "c")
+    assert a.convex and b.convex
+    specs = [kernel.KernelSpec(0.0), kernel.KernelSpec(2.0)]
+    got = kernel.sweep_pairs([a, b, c], [(0, 1), (1, 0), (0, 2)], specs, directions)
+    with np.errstate(all="ignore"):
+        for k, (x, y) in enumerate([(a, b), (b, a), (a, c)]):
+            ref = _edge_pair_histograms(x, y, [_Kernel(0.0), _Kernel(2.0)], directions)
+            assert_close(got[k], ref)
+
+
 def test_kernel_matches_reference_on_masks() -> None:
     shape = (256, 256)
     rng = np.random.default_rng(3)
