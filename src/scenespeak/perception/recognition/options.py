@@ -73,6 +73,9 @@ class LabelOptions:
         scene's SIFT time.
     finer_budget : float
         0.15 — the boxes searched cover at most this share of the scene (before enlarging).
+    colour : bool
+        True — the pipeline names unknown objects whose colours and proportions fit one
+        learnt object only (:mod:`~scenespeak.perception.recognition.colour`; False: off).
     """
 
     ratio: float = 0.8
@@ -95,6 +98,7 @@ class LabelOptions:
     finer_max_area: float = 40000.0
     finer_max_boxes: int = 6
     finer_budget: float = 0.15
+    colour: bool = True
 
     @classmethod
     def with_overrides(

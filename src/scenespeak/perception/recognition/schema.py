@@ -16,11 +16,14 @@ from scenespeak.perception.recognition.index import _DIM
 if TYPE_CHECKING:
     from scenespeak.perception.recognition.ivf import FaissIndex, IVFIndex
 
-__all__ = ["APPLICATION", "APPLICATION_ID", "SCHEMA_VERSION"]
+__all__ = ["APPLICATION", "APPLICATION_ID", "READABLE_VERSIONS", "SCHEMA_VERSION", "migrate"]
 
 
 APPLICATION = "scenespeak-object-database"
-SCHEMA_VERSION = 1
+SCHEMA_VERSION = 2
+#: Versions this scenespeak reads: 1 (no colour signatures) is upgraded in place when opened
+#: for writing (:func:`migrate`), and read as it is when opened read-only.
+READABLE_VERSIONS = ("1", "2")
 #: SQLite ``PRAGMA application_id`` of our files ("SCSK").
 APPLICATION_ID = 0x5343534B
 _SQLITE_MAGIC = b"SQLite format 3\x00"
@@ -45,6 +48,11 @@ CREATE TABLE views (
     outline BLOB NOT NULL
 );
 CREATE INDEX views_object ON views(object_id);
+CREATE TABLE view_colours (
+    view_id INTEGER PRIMARY KEY REFERENCES views(id) ON DELETE CASCADE,
+    signature BLOB NOT NULL,
+    aspect REAL NOT NULL
+);
 CREATE TABLE index_cache (
     kind TEXT PRIMARY KEY,
     generation INTEGER NOT NULL,
@@ -78,11 +86,11 @@ def _check_schema(path: Path, conn: sqlite3.Connection) -> None:
     if meta.get("application") != APPLICATION:
         raise DatabaseError(path, f"{not_ours} (its 'meta' table names another application)")
     version = meta.get("schema_version")
-    if version != str(SCHEMA_VERSION):
+    if version not in READABLE_VERSIONS:
         raise DatabaseError(
             path,
             f"{not_ours} of this version (schema version {version}, this scenespeak reads "
-            f"{SCHEMA_VERSION}); rebuild it with `scenespeak db add`",
+            f"{' and '.join(READABLE_VERSIONS)}); rebuild it with `scenespeak db add`",
         )
     missing = {"objects", "views"} - tables
     if missing:
@@ -93,6 +101,32 @@ def _check_schema(path: Path, conn: sqlite3.Connection) -> None:
         raise DatabaseError(path, f"{not_ours} (corrupt: {exc})") from None
     if check is None or check[0] != "ok":
         raise DatabaseError(path, f"{not_ours} (corrupt: {check[0] if check else 'no answer'})")
+
+
+#: Schema version 2's addition: each training view's colour signature and chromatic-box aspect
+#: (:mod:`~scenespeak.perception.recognition.colour`); views learnt before have no row.
+_COLOUR_TABLE = _SCHEMA[_SCHEMA.index("CREATE TABLE view_colours") :].split(";")[0]
+
+
+def migrate(conn: sqlite3.Connection) -> None:
+    """Upgrade a version-1 file to this version in one transaction (a no-op when current).
+
+    Version 2 adds the ``view_colours`` table; the views learnt before keep no colour
+    signature (they are still found by their descriptors; ``db add --replace`` adds one).
+    """
+    row = conn.execute("SELECT value FROM meta WHERE key = 'schema_version'").fetchone()
+    if row is None or row[0] == str(SCHEMA_VERSION):
+        return
+    conn.execute("BEGIN IMMEDIATE")
+    try:
+        conn.execute(_COLOUR_TABLE)
+        conn.execute(
+            "UPDATE meta SET value = ? WHERE key = 'schema_version'", (str(SCHEMA_VERSION),)
+        )
+        conn.execute("COMMIT")
+    except BaseException:
+        conn.execute("ROLLBACK")
+        raise
 
 
 # -- the index cache ------------------------------------------------------------------

@@ -18,6 +18,7 @@ from scenespeak.cleantext import check_label
 from scenespeak.errors import DatabaseError, InputError
 from scenespeak.perception import dbfiles
 from scenespeak.perception.features import Features
+from scenespeak.perception.recognition.colour import BINS, ColourModel
 from scenespeak.perception.recognition.index import (
     DescriptorIndex,
     IndexKind,
@@ -34,6 +35,7 @@ from scenespeak.perception.recognition.schema import (
     _check_schema,
     _duplicate,
     _now,
+    migrate,
 )
 from scenespeak.perception.recognition.views import ImageLike, MaskLike, _extract_view, _ViewData
 from scenespeak.safeio import as_path
@@ -167,6 +169,11 @@ class ObjectDatabase:
         conn = dbfiles.connect(p, readonly=readonly)
         try:
             _check_schema(p, conn)
+            if not readonly:
+                migrate(conn)
+        except sqlite3.Error as exc:
+            conn.close()
+            raise DatabaseError(p, f"cannot upgrade the schema: {exc}") from None
         except BaseException:
             conn.close()
             raise
@@ -389,6 +396,11 @@ class ObjectDatabase:
         if old and not missing_ok:
             raise DatabaseError(self.path, _duplicate(label))
         for (oid,) in old:
+            conn.execute(
+                "DELETE FROM view_colours WHERE view_id IN "
+                "(SELECT id FROM views WHERE object_id = ?)",
+                (oid,),
+            )
             conn.execute("DELETE FROM views WHERE object_id = ?", (oid,))
             conn.execute("DELETE FROM objects WHERE id = ?", (oid,))
         return bool(old)
@@ -446,6 +458,44 @@ class ObjectDatabase:
     def _set_nprobe(self, nprobe: int) -> None:
         if self._loaded is not None and hasattr(self._loaded.index, "nprobe"):
             self._loaded.index.nprobe = nprobe
+
+    def colour_models(self) -> dict[str, ColourModel]:
+        """Each object's colour signatures and chromatic-box aspects, by label
+        (:mod:`~scenespeak.perception.recognition.colour`); objects learnt without masks, from
+        gray images or into a version-1 file opened read-only have none.
+
+        Examples
+        --------
+        >>> import pathlib, tempfile
+        >>> from skimage import data
+        >>> mask = np.zeros((512, 512), bool); mask[50:400, 100:300] = True
+        >>> path = pathlib.Path(tempfile.mkdtemp()) / "objects.db"
+        >>> with ObjectDatabase.create(path) as db:
+        ...     _ = db.add_object("astronaut", [data.astronaut()], masks=[mask])
+        ...     _ = db.add_object("cat", [data.chelsea()])  # no mask: no colour
+        ...     {k: m.signatures.shape for k, m in db.colour_models().items()}
+        {'astronaut': (1, 28)}
+        """
+        rows: list[tuple[Any, ...]] = []
+        tables = self._query("SELECT name FROM sqlite_master WHERE name = 'view_colours'")
+        if tables:  # none in a version-1 file opened read-only
+            rows = self._query(
+                "SELECT o.label, c.signature, c.aspect FROM view_colours c "
+                "JOIN views v ON v.id = c.view_id JOIN objects o ON o.id = v.object_id "
+                "ORDER BY v.id"
+            )
+        by_label: dict[str, tuple[list[NDArray[np.float32]], list[float]]] = {}
+        for label, blob, aspect in rows:
+            sig = np.frombuffer(blob, np.float32)
+            if sig.shape != (BINS,) or not np.all(np.isfinite(sig)):
+                continue  # a damaged signature only costs the colour cue
+            sigs, aspects = by_label.setdefault(str(label), ([], []))
+            sigs.append(sig)
+            aspects.append(float(aspect))
+        return {
+            label: ColourModel(np.array(sigs, np.float32), np.array(aspects, np.float32))
+            for label, (sigs, aspects) in by_label.items()
+        }
 
     @property
     def index(self) -> DescriptorIndex:
@@ -533,3 +583,10 @@ def _insert_view(conn: sqlite3.Connection, oid: int, v: _ViewData) -> None:
             np.ascontiguousarray(v.outline, np.float32).tobytes(),
         ),
     )
+    if v.colour is not None:
+        sig, aspect = v.colour
+        conn.execute(
+            "INSERT INTO view_colours(view_id, signature, aspect) "
+            "VALUES (last_insert_rowid(), ?, ?)",
+            (np.ascontiguousarray(sig, np.float32).tobytes(), float(aspect)),
+        )

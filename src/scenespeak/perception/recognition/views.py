@@ -12,6 +12,7 @@ from numpy.typing import NDArray
 
 from scenespeak.errors import ImageError
 from scenespeak.perception.features import Features, as_mask, detect, load_image, to_gray
+from scenespeak.perception.recognition.colour import view_colour
 
 __all__ = ["ImageLike", "MaskLike", "outline_from_mask"]
 
@@ -80,6 +81,8 @@ class _ViewData:
     has_mask: bool
     features: Features
     outline: NDArray[np.float32]
+    #: the colour signature and chromatic-box aspect inside the mask (None: no mask, or gray)
+    colour: tuple[NDArray[np.float32], float] | None = None
 
 
 def _source_name(item: object, i: int, kind: str) -> str:
@@ -95,6 +98,16 @@ def _read_image(item: ImageLike, i: int) -> NDArray[np.uint8]:
         return to_gray(np.asarray(item))
     except ImageError as exc:
         raise ImageError(_source_name(item, i, "image"), exc.problem) from None
+
+
+def _colour_of(
+    item: ImageLike, mask: NDArray[np.bool_]
+) -> tuple[NDArray[np.float32], float] | None:
+    """The colour signature inside ``mask`` of an RGB image (a file read again in colour)."""
+    image = load_image(item, gray=False) if isinstance(item, str | PathLike) else np.asarray(item)
+    if image.ndim != 3 or image.shape[:2] != mask.shape:
+        return None
+    return view_colour(image, mask)
 
 
 def _read_mask(item: MaskLike, i: int, shape: tuple[int, ...]) -> NDArray[np.bool_] | None:
@@ -142,4 +155,5 @@ def _extract_view(
             + "; use a sharper, more textured or larger image of the object",
         )
     outline = outline_from_mask(m) if m is not None else _border_outline(w, h)
-    return _ViewData(source, w, h, m is not None, feats, outline)
+    colour = _colour_of(image, m) if m is not None else None
+    return _ViewData(source, w, h, m is not None, feats, outline, colour)

@@ -1,0 +1,323 @@
+"""Colour and shape as a second cue: unknown segments named where SIFT is weak.
+
+Some textures give SIFT almost nothing to hold on to at 1–2 m: a colour wheel (smooth
+gradients), a logo of a few flat colours wrapped round a cup. The geometric stage still finds
+such an object standing on the support, as an *unknown object*; this module names it when its
+colours and its proportions agree with exactly one learnt object and clearly with no other
+(Swain & Ballard, "Color indexing", IJCV 1991: colour histograms are stable under rotation,
+change of view and partial occlusion).
+
+The signature of a set of pixels is a normalised histogram of :data:`BINS` bins: pixels of low
+saturation or low value fall in one of 4 *grey* bins by value, the rest in 12 hue bins × 2
+saturation bins. Only the *chromatic* part is used to name: a plain floor that the dense map
+smears into a segment, a shadow or a grey label adds grey, never hue. Chromatic parts are
+renormalised and compared by the Hellinger distance ``d(p, q) = sqrt(1 − Σ sqrt(p_i q_i))``
+(0 identical, 1 disjoint; Bhattacharyya 1943). An unknown object is named ``L`` when
+
+- at least ``min_chroma`` of its pixels are chromatic, and at least ``model_chroma`` of the
+  pixels of ``L``'s training views are (mostly-grey objects — a star field, a cell photo —
+  are never named by colour: their greys are what floors, shadows and gravel look like), and
+  ``L``'s chromatic pixels are spread over several bins (at most ``max_bin`` in one: a
+  one-colour object is matched by any plain object of that colour);
+- its nearest training view (of a colourful object) belongs to ``L``, at a distance ``d1 ≤
+  max_distance``, and the nearest view of every other object is at ``d2 ≥ lead · d1`` *and*
+  ``d2 − d1 ≥ margin``;
+- the height over width of its chromatic pixels' box in the image lies within a factor
+  ``aspect`` of that of a training view's chromatic pixels (a tall bottle and a flat parcel
+  of the same colours are not confused).
+
+Objects learnt without a colour signature (a database of schema version 1, gray training
+images) are never named this way.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+from numpy.typing import NDArray
+
+from scenespeak.perception.objects import SceneObject
+
+__all__ = [
+    "BINS",
+    "ColourModel",
+    "ColourOptions",
+    "chromatic_pixels",
+    "colour_signature",
+    "hellinger",
+    "name_by_colour",
+    "name_unknown_objects",
+    "view_colour",
+]
+
+#: Bins of a colour signature: 4 grey bins by value, then 12 hues × 2 saturations.
+BINS = 28
+_GREYS = 4
+_GREY_SATURATION = 0.25
+_GREY_VALUE = 0.2
+_HIGH_SATURATION = 0.6
+
+
+@dataclass(frozen=True)
+class ColourOptions:
+    """Knobs of :func:`name_by_colour` (see the module docstring; set on the tuning set).
+
+    Attributes
+    ----------
+    max_distance : float
+        0.3 — largest Hellinger distance (chromatic parts) to the nearest training view.
+    lead : float
+        2.0 — every other object's nearest view is at least this many times farther ...
+    margin : float
+        0.25 — ... and at least this much farther.
+    aspect : float
+        1.6 — the chromatic box's height / width within this factor of a training view's.
+    min_chroma, model_chroma : float
+        0.1, 0.3 — least share of chromatic pixels in the object, in the learnt object's views.
+    max_bin : float
+        0.65 — a learnt object whose views put more than this share of their chromatic pixels
+        (on average) in one bin is never named by colour: one colour is matched by any plain
+        object of that colour (on the tuning set a plain red distractor came out as the
+        reddish "novel", 95 % in one bin; the cup's logo puts 52 % in its largest bin, the
+        colour wheel 12 %).
+    min_pixels : int
+        20 — fewer chromatic pixels than this (of the object's sampled points): not named.
+    """
+
+    max_distance: float = 0.3
+    lead: float = 2.0
+    margin: float = 0.25
+    aspect: float = 1.6
+    min_chroma: float = 0.1
+    model_chroma: float = 0.3
+    max_bin: float = 0.65
+    min_pixels: int = 20
+
+
+@dataclass(frozen=True, eq=False)
+class ColourModel:
+    """One learnt object's colour signatures and proportions, one row per training view.
+
+    Attributes
+    ----------
+    signatures : (V, BINS) float32
+        Each view's colour signature of the object's pixels (:func:`colour_signature`).
+    aspects : (V,) float32
+        Each view's height over width of the box round its chromatic object pixels (0: none).
+    """
+
+    signatures: NDArray[np.float32]
+    aspects: NDArray[np.float32]
+
+
+def _bins(rgb: NDArray[np.uint8]) -> NDArray[np.intp]:
+    px = np.asarray(rgb, dtype=np.uint8).reshape(-1, 1, 3)
+    if not len(px):
+        return np.zeros(0, np.intp)
+    hsv = cv2.cvtColor(px, cv2.COLOR_RGB2HSV).reshape(-1, 3).astype(np.float64)
+    hue, sat, val = hsv[:, 0] * 2.0, hsv[:, 1] / 255.0, hsv[:, 2] / 255.0
+    chromatic = (sat >= _GREY_SATURATION) & (val >= _GREY_VALUE)
+    hue_bin = np.minimum((hue / 30.0).astype(np.intp), 11)
+    grey_bin = np.minimum((val * 4.0).astype(np.intp), _GREYS - 1)
+    colour_bin = _GREYS + 2 * hue_bin + (sat >= _HIGH_SATURATION)
+    return np.asarray(np.where(chromatic, colour_bin, grey_bin))
+
+
+def colour_signature(rgb: NDArray[np.uint8]) -> NDArray[np.float32]:
+    """The colour signature of ``(N, 3)`` RGB pixels (or an ``(H, W, 3)`` image's pixels).
+
+    Examples
+    --------
+    >>> red = np.tile(np.array([[200, 20, 20]], np.uint8), (10, 1))
+    >>> grey = np.full((10, 3), 128, np.uint8)
+    >>> int(np.argmax(colour_signature(red))), int(np.argmax(colour_signature(grey)))
+    (5, 2)
+    >>> float(colour_signature(np.concatenate([red, grey])).sum())
+    1.0
+    """
+    idx = _bins(rgb)
+    counts = np.bincount(idx, minlength=BINS).astype(np.float32)
+    total = float(counts.sum())
+    return counts / np.float32(total) if total > 0 else counts
+
+
+def chromatic_pixels(rgb: NDArray[np.uint8]) -> NDArray[np.bool_]:
+    """Whether each ``(N, 3)`` RGB pixel is chromatic (saturated and not dark).
+
+    >>> chromatic_pixels(np.array([[200, 20, 20], [128, 128, 128]], np.uint8)).tolist()
+    [True, False]
+    """
+    return np.asarray(_bins(rgb) >= _GREYS)
+
+
+def _box_aspect(xy: NDArray[np.float64]) -> float:
+    """Height over width of the 2–98 % box of positions (column, row); 0 if degenerate."""
+    if len(xy) < 3:
+        return 0.0
+    lo, hi = np.percentile(xy, 2, axis=0), np.percentile(xy, 98, axis=0)
+    w, h = float(hi[0] - lo[0]) + 1.0, float(hi[1] - lo[1]) + 1.0
+    return h / w
+
+
+def view_colour(
+    image: NDArray[np.generic], mask: NDArray[np.bool_]
+) -> tuple[NDArray[np.float32], float] | None:
+    """A training view's signature and chromatic-box aspect inside ``mask`` (None: gray image).
+
+    >>> img = np.full((20, 20, 3), 128, np.uint8); img[2:12, 5:10] = (200, 20, 20)
+    >>> sig, aspect = view_colour(img, np.ones((20, 20), bool))
+    >>> round(float(sig[5]), 3), round(aspect, 2)
+    (0.125, 2.0)
+    """
+    img = np.asarray(image)
+    if img.ndim != 3 or img.shape[2] < 3 or img.dtype != np.uint8:
+        return None
+    rows, cols = np.nonzero(np.asarray(mask, bool))
+    rgb = img[rows, cols, :3]
+    chroma = chromatic_pixels(rgb)
+    xy = np.column_stack([cols[chroma], rows[chroma]]).astype(np.float64)
+    return colour_signature(rgb), _box_aspect(xy)
+
+
+def hellinger(p: NDArray[np.floating], q: NDArray[np.floating]) -> NDArray[np.float64]:
+    """Hellinger distance between normalised histograms (last axis; broadcasts).
+
+    >>> hellinger(np.array([1.0, 0.0]), np.array([0.0, 1.0])).item()
+    1.0
+    >>> hellinger(np.array([0.5, 0.5]), np.array([0.5, 0.5])).item()
+    0.0
+    """
+    bc = np.sum(np.sqrt(np.asarray(p, np.float64) * np.asarray(q, np.float64)), axis=-1)
+    return np.asarray(np.sqrt(np.clip(1.0 - bc, 0.0, 1.0)))
+
+
+def _chroma(sig: NDArray[np.floating]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """The chromatic parts renormalised (last axis), and their shares."""
+    s = np.asarray(sig, np.float64)
+    part = s[..., _GREYS:]
+    share = part.sum(axis=-1)
+    return part / np.maximum(share, 1e-12)[..., None], share
+
+
+def name_by_colour(
+    signature: NDArray[np.floating],
+    aspect: float,
+    models: Mapping[str, ColourModel],
+    options: ColourOptions | None = None,
+) -> tuple[str, float, float] | None:
+    """The label whose colours and proportions alone fit, as ``(label, d1, d2)``, or None.
+
+    ``d1`` is the distance to the label's nearest view, ``d2`` to any other object's (the
+    rules are in the module docstring).
+
+    Examples
+    --------
+    >>> def sig(*rgb):
+    ...     return colour_signature(np.repeat(np.array(rgb, np.uint8), 5, axis=0))
+    >>> tin = sig((200, 20, 20), (20, 160, 40))  # red and green
+    >>> mug = sig((20, 20, 200), (230, 230, 40))  # blue and yellow
+    >>> one = np.ones(1, np.float32)
+    >>> models = {"tin": ColourModel(tin[None], one), "mug": ColourModel(mug[None], one)}
+    >>> name_by_colour(tin, 1.2, models)
+    ('tin', 0.0, 1.0)
+    >>> name_by_colour(tin, 3.0, models) is None  # three times as tall as any tin view
+    True
+    >>> name_by_colour(sig((200, 20, 20)), 1.0, models) is None  # red alone: not the tin
+    True
+    """
+    o = options or ColourOptions()
+    query, q_share = _chroma(signature)
+    if len(models) < 2 or float(q_share) < o.min_chroma or not aspect > 0:
+        return None
+    near: dict[str, float] = {}
+    for lab, m in models.items():
+        parts, shares = _chroma(m.signatures)
+        specific = float(shares.mean()) >= o.model_chroma
+        specific &= float(parts.max(axis=-1).mean()) <= o.max_bin
+        near[lab] = float(hellinger(query, parts).min()) if specific else 1.0
+    ranked = sorted(near.items(), key=lambda kv: kv[1])
+    (label, d1), (_, d2) = ranked[0], ranked[1]
+    if d1 > o.max_distance or d2 < o.lead * d1 or d2 - d1 < o.margin:
+        return None
+    views = models[label].aspects
+    fits = (views > 0) & (aspect <= o.aspect * views) & (aspect * o.aspect >= views)
+    return (label, d1, d2) if bool(np.any(fits)) else None
+
+
+def _object_pixels(
+    obj: SceneObject, image: NDArray[np.uint8], camera: NDArray[np.float64]
+) -> tuple[NDArray[np.uint8], NDArray[np.float64]]:
+    """The image's RGB values at the object's points (projected by the 3 × 3 ``camera``), and
+    those pixels' positions (column, row)."""
+    xyz = np.asarray(obj.xyz, np.float64)
+    uvw = xyz[xyz[:, 2] > 1e-6] @ camera.T
+    uv = np.rint(uvw[:, :2] / uvw[:, 2:3]).astype(np.intp)
+    h, w = image.shape[:2]
+    uv = uv[(uv[:, 0] >= 0) & (uv[:, 0] < w) & (uv[:, 1] >= 0) & (uv[:, 1] < h)]
+    return np.asarray(image[uv[:, 1], uv[:, 0]], np.uint8).reshape(-1, 3), uv.astype(np.float64)
+
+
+def name_unknown_objects(
+    objects: Sequence[SceneObject],
+    image: NDArray[np.generic],
+    camera: NDArray[np.float64],
+    models: Mapping[str, ColourModel],
+    options: ColourOptions | None = None,
+) -> tuple[SceneObject, ...]:
+    """``objects`` with the unknown ones that colour and shape name (:func:`name_by_colour`)
+    renamed, instances numbered ("cup", "cup 2") and the unknown ones left renumbered.
+
+    Parameters
+    ----------
+    objects : sequence of SceneObject
+        The scene's objects; those labelled ``"unknown object N"`` are candidates.
+    image : (H, W, 3) uint8
+        The left image (RGB) the objects' points project into; a gray image names nothing.
+    camera : (3, 3)
+        The left camera matrix of the objects' frame.
+    models : mapping
+        Label → :class:`ColourModel` (:meth:`ObjectDatabase.colour_models`).
+    options : ColourOptions, optional
+    """
+    o = options or ColourOptions()
+    img = np.asarray(image)
+    if not models or img.ndim != 3 or img.shape[2] < 3 or img.dtype != np.uint8:
+        return tuple(objects)
+    out = list(objects)
+    for i, obj in enumerate(out):
+        if not obj.label.startswith("unknown object"):
+            continue
+        rgb, uv = _object_pixels(obj, img[..., :3], np.asarray(camera, np.float64))
+        chroma = chromatic_pixels(rgb)
+        if int(chroma.sum()) < o.min_pixels:
+            continue
+        named = name_by_colour(colour_signature(rgb), _box_aspect(uv[chroma]), models, o)
+        if named is None:
+            continue
+        label, d1, d2 = named
+        note = f"named by colour and shape (distance {d1:.2f}, next object {d2:.2f})"
+        out[i] = dataclasses.replace(
+            obj, label=label, name=label, confidence=0.5, notes=(*obj.notes, note)
+        )
+    return tuple(_renumbered(out))
+
+
+def _renumbered(objects: list[SceneObject]) -> list[SceneObject]:
+    """Distinct names per label ("cup", "cup 2"), unknown objects numbered 1, 2, ... again."""
+    seen: dict[str, int] = {}
+    unknown = 0
+    out = []
+    for obj in objects:
+        if obj.label.startswith("unknown object"):
+            unknown += 1
+            name = f"unknown object {unknown}"
+            out.append(dataclasses.replace(obj, label=name, name=name))
+            continue
+        seen[obj.label] = seen.get(obj.label, 0) + 1
+        name = obj.label if seen[obj.label] == 1 else f"{obj.label} {seen[obj.label]}"
+        out.append(obj if obj.key == name else dataclasses.replace(obj, name=name))
+    return out
