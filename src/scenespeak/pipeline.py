@@ -43,7 +43,7 @@ import time
 from collections.abc import Callable, Iterator, Mapping
 from concurrent.futures import Executor, Future, ThreadPoolExecutor
 from contextlib import contextmanager
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from os import PathLike
 from pathlib import Path
 from typing import Any
@@ -56,6 +56,7 @@ from scenespeak.errors import DatabaseError, ImageError, InputError
 from scenespeak.perception.blas import single_threaded_blas
 from scenespeak.perception.features import Features, detect, to_gray
 from scenespeak.perception.objects import ObjectOptions, SceneObject
+from scenespeak.perception.recognition.colour import ColourModel, name_unknown_objects
 from scenespeak.perception.recognition.options import LabelOptions
 from scenespeak.perception.recognition.results import Labelling
 from scenespeak.perception.scene_objects import StrategyOptions, geometry_for, scene_objects
@@ -329,7 +330,8 @@ def describe_scene(
         with _timed(timings, "wait"):
             stage: StereoStage = future_st.result()
         id_to_label = {o.id: o.label for o in db.list_objects()} if opts.strategy.geometry else {}
-        early = _EarlyStages((left, right), feats_l, stage, labelling, id_to_label)
+        colours = db.colour_models() if opts.labels.colour and hasattr(db, "colour_models") else {}
+        early = _EarlyStages((left, right), feats_l, stage, labelling, id_to_label, colours)
         return _after_stereo(early, opts, src, timings, say)
 
 
@@ -364,6 +366,7 @@ class _EarlyStages:
     stereo: StereoStage
     labelling: Labelling
     id_to_label: Mapping[int, str]
+    colours: Mapping[str, ColourModel] = field(default_factory=dict)
 
 
 def _stereo_stage(
@@ -446,6 +449,10 @@ def _after_stereo(
             opts.objects,
             early.stereo.geometry,
         )
+        if early.colours and not result.rect.needs_resampling:
+            # unknown objects that colour and shape name (recognition.colour); the points
+            # project into the left image as given only when it was not resampled
+            objects = name_unknown_objects(objects, early.images[0], rig.K_left, early.colours)
 
     say("relations")
     with _timed(timings, "relations"):
