@@ -79,6 +79,7 @@ class ObjectDatabase:
         self.readonly = readonly
         self.index_kind: IndexKind = index_kind
         self._loaded: _Loaded | None = None
+        self._colours: tuple[int, dict[str, ColourModel]] | None = None  # (generation, models)
 
     # -- opening -------------------------------------------------------------------------
 
@@ -476,6 +477,9 @@ class ObjectDatabase:
         ...     {k: m.signatures.shape for k, m in db.colour_models().items()}
         {'astronaut': (1, 28)}
         """
+        gen = self.generation()
+        if self._colours is not None and self._colours[0] == gen:
+            return dict(self._colours[1])
         rows: list[tuple[Any, ...]] = []
         tables = self._query("SELECT name FROM sqlite_master WHERE name = 'view_colours'")
         if tables:  # none in a version-1 file opened read-only
@@ -492,10 +496,12 @@ class ObjectDatabase:
             sigs, aspects = by_label.setdefault(str(label), ([], []))
             sigs.append(sig)
             aspects.append(float(aspect))
-        return {
+        models = {
             label: ColourModel(np.array(sigs, np.float32), np.array(aspects, np.float32))
             for label, (sigs, aspects) in by_label.items()
         }
+        self._colours = (gen, models)
+        return dict(models)
 
     @property
     def index(self) -> DescriptorIndex:
