@@ -23,8 +23,9 @@ stage's result in a frozen :class:`SceneDescription`:
    pair's histograms computed once and read both ways).
 
 Threads: the two SIFT extractions run at the same time; then the second thread runs the whole
-stereo stage (matching, SGBM around the matches, triangulation) while this one labels the left
-keypoints (``docs/architecture.md``).
+stereo stage (matching, SGBM around the matches, triangulation) and geometry first's support
+plane and segments while this one labels the left keypoints; the finer search's boxes go to
+whichever thread is free (``docs/architecture.md``; the result is the same with one thread).
 
 Speed (``benchmarks/bench_pipeline.py --only timing``, 640×480 rendered pair with 5 objects,
 shared 2-core machine): the whole call takes about 0.9–1.0× the two SIFT extractions run one
