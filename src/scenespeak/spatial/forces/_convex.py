@@ -30,46 +30,57 @@ TAYLOR_RATIO = 1e-3
 
 
 @jit
-def project_vertices(
-    c: float, s: float, pts: np.ndarray, lo_g: int, hi_g: int, pv: np.ndarray, ps: np.ndarray
-) -> tuple[int, int]:
-    """``pv[k]``, ``ps[k]`` (across / along the lines) of vertices ``lo_g:hi_g`` for direction
-    (c, s); returns the indices of the lowest and the highest vertex (first of equals)."""
-    imin = lo_g
-    imax = lo_g
-    for k in range(lo_g, hi_g):
-        x = pts[k, 0]
-        y = pts[k, 1]
-        v = y * c - x * s
-        pv[k] = v
-        ps[k] = x * c + y * s
-        if v < pv[imin]:
-            imin = k
-        if v > pv[imax]:
-            imax = k
-    return imin, imax
+def _vs(pts: np.ndarray, k: int, cs: tuple[float, float]) -> tuple[float, float]:
+    """``(v, s)`` of vertex k for direction ``cs = (cos θ, sin θ)`` (across, along the lines)."""
+    c, s = cs
+    return pts[k, 1] * c - pts[k, 0] * s, pts[k, 0] * c + pts[k, 1] * s
 
 
 @jit
-def project_chained(
-    c: float,
-    s: float,
+def _descend(pts: np.ndarray, k: int, cs: tuple[float, float], r: tuple[int, int], up: bool) -> int:
+    """From vertex k, the neighbouring vertices while ``v`` falls (rises if ``up``): the
+    lowest (highest) vertex of a convex ring in ``lo_g:hi_g = r`` from a vertex near it."""
+    sign = -1.0 if up else 1.0
+    v = sign * _vs(pts, k, cs)[0]
+    while True:
+        n = _step(k, 1, r[0], r[1])
+        vn = sign * _vs(pts, n, cs)[0]
+        if vn < v:
+            k, v = n, vn
+            continue
+        n = _step(k, -1, r[0], r[1])
+        vn = sign * _vs(pts, n, cs)[0]
+        if vn < v:
+            k, v = n, vn
+            continue
+        return k
+
+
+@jit
+def track_extremes(
+    cs: tuple[float, float],
     pts: np.ndarray,
     region_start: np.ndarray,
     chained: np.ndarray,
-    scratch: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+    scratch: tuple[np.ndarray, np.ndarray],
+    first: bool,
 ) -> None:
-    """:func:`project_vertices` of every region with ``chained[g]``: ``scratch = (pv, ps,
-    low_high, extent)``, ``low_high[g]`` its lowest and highest vertex, ``extent[g]`` their
-    ``v`` (the same floats as the edge table's range)."""
-    pv, ps, low_high, extent = scratch
+    """The lowest and highest vertex (``low_high[g]``) and their ``v`` (``extent[g]``) of every
+    region with ``chained[g]``, ``scratch = (low_high, extent)``: every vertex looked at in
+    the first direction, then a walk from the previous direction's (they move by about
+    ``n / directions`` vertices from one direction to the next)."""
+    low_high, extent = scratch
     for g in range(region_start.size - 1):
-        if chained[g]:
-            lo, hi = project_vertices(c, s, pts, region_start[g], region_start[g + 1], pv, ps)
-            low_high[g, 0] = lo
-            low_high[g, 1] = hi
-            extent[g, 0] = pv[lo]
-            extent[g, 1] = pv[hi]
+        if not chained[g]:
+            continue
+        r = (region_start[g], region_start[g + 1])
+        if first:
+            low_high[g, 0] = r[0]
+            low_high[g, 1] = r[0]
+        low_high[g, 0] = _descend(pts, low_high[g, 0], cs, r, False)
+        low_high[g, 1] = _descend(pts, low_high[g, 1], cs, r, True)
+        extent[g, 0] = _vs(pts, low_high[g, 0], cs)[0]
+        extent[g, 1] = _vs(pts, low_high[g, 1], cs)[0]
 
 
 @jit
@@ -91,8 +102,8 @@ def _psi2(u: float) -> float:
 
 @jit
 def _edge(
-    pv: np.ndarray,
-    ps: np.ndarray,
+    pts: np.ndarray,
+    cs: tuple[float, float],
     r: tuple[int, int, int, int],
     step: int,
     shift: tuple[float, float],
@@ -101,18 +112,18 @@ def _edge(
     """The chain's edge from the breakpoint ``at = (vertex, v, s)`` (shifted by ``shift``):
     ``(v, s, next vertex, its v, its s, ds/dv)``, the next ``v`` at least ``v`` (the running
     maximum that keeps a chain's breakpoints in order)."""
-    lo_g, hi_g = r[0], r[1]
     k, v, s = at
-    n = _step(k, step, lo_g, hi_g)
-    vn = max(pv[n] + shift[0], v)
-    sn = ps[n] + shift[1]
+    n = _step(k, step, r[0], r[1])
+    vn, sn = _vs(pts, n, cs)
+    vn = max(vn + shift[0], v)
+    sn += shift[1]
     return v, s, n, vn, sn, (sn - s) / (vn - v) if vn > v else 0.0
 
 
 @jit
 def _first_edge(
-    pv: np.ndarray,
-    ps: np.ndarray,
+    pts: np.ndarray,
+    cs: tuple[float, float],
     r: tuple[int, int, int, int],
     step: int,
     shift: tuple[float, float],
@@ -121,9 +132,10 @@ def _first_edge(
     """:func:`_edge` of the chain's edge whose range of lines holds ``t`` (from the lowest
     vertex up)."""
     k = r[2]
-    e = _edge(pv, ps, r, step, shift, (k, pv[k] + shift[0], ps[k] + shift[1]))
+    v, s = _vs(pts, k, cs)
+    e = _edge(pts, cs, r, step, shift, (k, v + shift[0], s + shift[1]))
     while e[3] <= t and e[2] != r[3]:
-        e = _edge(pv, ps, r, step, shift, (e[2], e[3], e[4]))
+        e = _edge(pts, cs, r, step, shift, (e[2], e[3], e[4]))
     return e
 
 
@@ -177,8 +189,8 @@ def _interval(
 
 @jit
 def chain_pair(
-    pv: np.ndarray,
-    ps: np.ndarray,
+    pts: np.ndarray,
+    cs: tuple[float, float],
     ra: tuple[int, int, int, int],
     step_a: int,
     rb: tuple[int, int, int, int],
@@ -192,14 +204,14 @@ def chain_pair(
     one (also the sign of its edges). B likewise, shifted into A's frame by ``shift = (dv,
     ds)``.
     """
-    t_end = min(pv[ra[3]], pv[rb[3]] + shift[0])
-    t = max(pv[ra[2]], pv[rb[2]] + shift[0])
+    t_end = min(_vs(pts, ra[3], cs)[0], _vs(pts, rb[3], cs)[0] + shift[0])
+    t = max(_vs(pts, ra[2], cs)[0], _vs(pts, rb[2], cs)[0] + shift[0])
     if not t_end > t:
         return 0.0, 0.0, 0.0, 0.0
     sign = float(step_a * step_b)
     # Each chain's current edge: from (v, s) to vertex n at (vn, sn), slope k = ds/dv.
-    va, sa, na, vna, sna, ka = _first_edge(pv, ps, ra, step_a, (0.0, 0.0), t)
-    vb, sb, nb, vnb, snb, kb = _first_edge(pv, ps, rb, step_b, shift, t)
+    va, sa, na, vna, sna, ka = _first_edge(pts, cs, ra, step_a, (0.0, 0.0), t)
+    vb, sb, nb, vnb, snb, kb = _first_edge(pts, cs, rb, step_b, shift, t)
     d = (sa + ka * (t - va)) - (sb + kb * (t - vb))
     psi = 0.0  # Ψ(|d|) when known
     known = False
@@ -220,9 +232,9 @@ def chain_pair(
         if tn >= t_end:
             break
         if vna <= tn:
-            va, sa, na, vna, sna, ka = _edge(pv, ps, ra, step_a, (0.0, 0.0), (na, vna, sna))
+            va, sa, na, vna, sna, ka = _edge(pts, cs, ra, step_a, (0.0, 0.0), (na, vna, sna))
         if vnb <= tn:
-            vb, sb, nb, vnb, snb, kb = _edge(pv, ps, rb, step_b, shift, (nb, vnb, snb))
+            vb, sb, nb, vnb, snb, kb = _edge(pts, cs, rb, step_b, shift, (nb, vnb, snb))
         t = tn
         d = dn
     return f0p, f2p, f0n, f2n
@@ -230,8 +242,8 @@ def chain_pair(
 
 @jit
 def walk_convex(
-    pv: np.ndarray,
-    ps: np.ndarray,
+    pts: np.ndarray,
+    cs: tuple[float, float],
     ra: tuple[int, int, int, int],
     rb: tuple[int, int, int, int],
     shift: tuple[float, float],
@@ -246,7 +258,7 @@ def walk_convex(
     p2 = 0.0
     for step_a in (1, -1):
         for step_b in (1, -1):
-            x0, x2, y0, y2 = chain_pair(pv, ps, ra, step_a, rb, step_b, shift)
+            x0, x2, y0, y2 = chain_pair(pts, cs, ra, step_a, rb, step_b, shift)
             t0 += x0
             t2 += x2
             p0 += y0

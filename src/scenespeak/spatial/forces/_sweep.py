@@ -30,7 +30,7 @@ from typing import TypeVar
 
 import numpy as np
 
-from scenespeak.spatial.forces._convex import project_chained, walk_convex
+from scenespeak.spatial.forces._convex import track_extremes, walk_convex
 from scenespeak.spatial.forces._jit import jit
 from scenespeak.spatial.forces._table import _tables
 
@@ -410,15 +410,13 @@ def sweep(
     # F0 + F2 (what every caller of f0_f2_pairs and force_histograms() asks for): fused walk.
     fast = n_k == 2 and codes[0] == 0 and codes[1] == 1
     chains, table, chained = _convex_pairs(convex, pair_a, pair_b, fast)
-    pv = np.empty(pts.shape[0])
-    ps = np.empty(pts.shape[0])
     low_high = np.zeros((region_start.size - 1, 2), dtype=np.int64)
     for d in range(half):
         theta = 2.0 * math.pi * d / directions
         c = math.cos(theta)
         s = math.sin(theta)
         _tables(c, s, pts, nxt, region_start, d == 0, (tab, perm, extent, srt, keys), table)
-        project_chained(c, s, pts, region_start, chained, (pv, ps, low_high, extent))
+        track_extremes((c, s), pts, region_start, chained, (low_high, extent), d == 0)
         for p in range(n_pairs):
             ga = pair_a[p]
             gb = pair_b[p]
@@ -431,8 +429,8 @@ def sweep(
             b0, b1 = region_start[gb], region_start[gb + 1]
             if chains[p]:
                 t0, t2, q0, q2 = walk_convex(
-                    pv,
-                    ps,
+                    pts,
+                    (c, s),
                     (a0, a1, low_high[ga, 0], low_high[ga, 1]),
                     (b0, b1, low_high[gb, 0], low_high[gb, 1]),
                     (dvb, ox * c + oy * s),
