@@ -28,9 +28,11 @@ plane and segments while this one labels the left keypoints; the finer search's 
 whichever thread is free (``docs/architecture.md``; the result is the same with one thread).
 
 Speed (``benchmarks/bench_pipeline.py --only timing``, 640×480 rendered pair with 5 objects,
-shared 2-core machine): the whole call takes about 0.9–1.0× the two SIFT extractions run one
-after the other and about 1.4–1.5× the two run in two threads as here; after SIFT, labelling
-14, waiting for the stereo stage 10, objects 8 and relations 4.5 ms (README, "Speed"). BLAS is
+shared 2-core machine, load 7–11, session 5): the whole call takes about 1.7–2.0× the two SIFT
+extractions run one after the other (CPU time about 2×); issue 10's target is 1.3×. In CPU
+time, one thread, bench scene 0: the two SIFTs ≈ 170–215 ms, stereo ≈ 25–40, the labelling
+≈ 13–19 plus the finer search ≈ 60–68 (its crops' SIFT and labelling), geometry first's plane
+and segments ≈ 21, the rest of the objects ≈ 27 and the relations ≈ 10 ms. BLAS is
 limited to one thread (the matrices are small; a second OpenBLAS thread made a 200 × 128 ×
 200 product 150× slower when the other core was busy).
 
