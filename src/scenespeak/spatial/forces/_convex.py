@@ -130,13 +130,20 @@ def _first_edge(
     t: float,
 ) -> tuple[float, float, int, float, float, float]:
     """:func:`_edge` of the chain's edge whose range of lines holds ``t`` (from the lowest
-    vertex up)."""
+    vertex up; the slope computed for that edge only)."""
     k = r[2]
     v, s = _vs(pts, k, cs)
-    e = _edge(pts, cs, r, step, shift, (k, v + shift[0], s + shift[1]))
-    while e[3] <= t and e[2] != r[3]:
-        e = _edge(pts, cs, r, step, shift, (e[2], e[3], e[4]))
-    return e
+    v += shift[0]
+    s += shift[1]
+    while True:
+        n = _step(k, step, r[0], r[1])
+        if n == r[3]:
+            break
+        vn = max(_vs(pts, n, cs)[0] + shift[0], v)
+        if vn > t:
+            break
+        k, v, s = n, vn, _vs(pts, n, cs)[1] + shift[1]
+    return _edge(pts, cs, r, step, shift, (k, v, s))
 
 
 @jit
@@ -191,27 +198,27 @@ def _interval(
 def chain_pair(
     pts: np.ndarray,
     cs: tuple[float, float],
-    ra: tuple[int, int, int, int],
-    step_a: int,
-    rb: tuple[int, int, int, int],
-    step_b: int,
+    regions: tuple[tuple[int, int, int, int], tuple[int, int, int, int]],
+    steps: tuple[int, int],
+    starts: tuple[tuple[float, float, int, float, float, float], ...],
     shift: tuple[float, float],
+    span: tuple[float, float],
 ) -> tuple[float, float, float, float]:
     """``(F0(θ) * 6, F2(θ), F0(θ + π) * 6, F2(θ + π))`` of one chain of A and one of B.
 
-    ``ra = (lo_g, hi_g, lowest, highest)`` of region A (vertices ``lo_g:hi_g``, its lowest
-    and highest vertex in this direction); ``step_a`` +1 for the right chain, -1 for the left
-    one (also the sign of its edges). B likewise, shifted into A's frame by ``shift = (dv,
-    ds)``.
+    ``regions = (ra, rb)``, ``ra = (lo_g, hi_g, lowest, highest)`` of region A (vertices
+    ``lo_g:hi_g``, its lowest and highest vertex in this direction); ``steps = (step_a,
+    step_b)``, +1 for a right chain, -1 for a left one (also the sign of its edges);
+    ``starts`` each chain's :func:`_first_edge` at ``t``; B shifted into A's frame by
+    ``shift = (dv, ds)``; ``span = (t, t_end)`` the lines that meet both regions.
     """
-    t_end = min(_vs(pts, ra[3], cs)[0], _vs(pts, rb[3], cs)[0] + shift[0])
-    t = max(_vs(pts, ra[2], cs)[0], _vs(pts, rb[2], cs)[0] + shift[0])
-    if not t_end > t:
-        return 0.0, 0.0, 0.0, 0.0
+    ra, rb = regions
+    step_a, step_b = steps
+    t, t_end = span
     sign = float(step_a * step_b)
     # Each chain's current edge: from (v, s) to vertex n at (vn, sn), slope k = ds/dv.
-    va, sa, na, vna, sna, ka = _first_edge(pts, cs, ra, step_a, (0.0, 0.0), t)
-    vb, sb, nb, vnb, snb, kb = _first_edge(pts, cs, rb, step_b, shift, t)
+    va, sa, na, vna, sna, ka = starts[0]
+    vb, sb, nb, vnb, snb, kb = starts[1]
     d = (sa + ka * (t - va)) - (sb + kb * (t - vb))
     psi = 0.0  # Ψ(|d|) when known
     known = False
@@ -252,15 +259,24 @@ def walk_convex(
 
     Returns ``(F0(θ), F2(θ), F0(θ + π), F2(θ + π))``, as ``_sweep._walk_f0_f2``.
     """
-    t0 = 0.0
-    t2 = 0.0
-    p0 = 0.0
-    p2 = 0.0
-    for step_a in (1, -1):
-        for step_b in (1, -1):
-            x0, x2, y0, y2 = chain_pair(pts, cs, ra, step_a, rb, step_b, shift)
-            t0 += x0
-            t2 += x2
-            p0 += y0
-            p2 += y2
+    t_end = min(_vs(pts, ra[3], cs)[0], _vs(pts, rb[3], cs)[0] + shift[0])
+    t = max(_vs(pts, ra[2], cs)[0], _vs(pts, rb[2], cs)[0] + shift[0])
+    if not t_end > t:
+        return 0.0, 0.0, 0.0, 0.0
+    none = (0.0, 0.0)
+    # The four chains' edges at t: the same for both merges a chain takes part in.
+    a_right = _first_edge(pts, cs, ra, 1, none, t)
+    a_left = _first_edge(pts, cs, ra, -1, none, t)
+    b_right = _first_edge(pts, cs, rb, 1, shift, t)
+    b_left = _first_edge(pts, cs, rb, -1, shift, t)
+    rs = (ra, rb)
+    span = (t, t_end)
+    x = chain_pair(pts, cs, rs, (1, 1), (a_right, b_right), shift, span)
+    y = chain_pair(pts, cs, rs, (1, -1), (a_right, b_left), shift, span)
+    z = chain_pair(pts, cs, rs, (-1, 1), (a_left, b_right), shift, span)
+    w = chain_pair(pts, cs, rs, (-1, -1), (a_left, b_left), shift, span)
+    t0 = ((x[0] + y[0]) + z[0]) + w[0]
+    t2 = ((x[1] + y[1]) + z[1]) + w[1]
+    p0 = ((x[2] + y[2]) + z[2]) + w[2]
+    p2 = ((x[3] + y[3]) + z[3]) + w[3]
     return t0 / 6.0, t2, p0 / 6.0, p2
