@@ -455,7 +455,10 @@ def _after_stereo(
         if early.colours and not result.rect.needs_resampling:
             # unknown objects that colour and shape name (recognition.colour); the points
             # project into the left image as given only when it was not resampled
-            objects = name_unknown_objects(objects, early.images[0], rig.K_left, early.colours)
+            trim = (np.asarray(rig.up, np.float64), replace(opts.objects, radius=None))
+            objects = name_unknown_objects(
+                objects, early.images[0], rig.K_left, early.colours, remake=trim
+            )
 
     say("relations")
     with _timed(timings, "relations"):

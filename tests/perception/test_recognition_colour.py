@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from skimage import data
 
-from scenespeak.perception.objects import SceneObject, make_object
+from scenespeak.perception.objects import ObjectOptions, SceneObject, make_object
 from scenespeak.perception.recognition import ObjectDatabase
 from scenespeak.perception.recognition.colour import (
     ColourModel,
@@ -96,11 +96,17 @@ def test_unknown_objects_in_an_image_are_named_and_renumbered() -> None:
     ]
     assert "named by colour" in named[1].notes[-1]
     assert named[1].confidence < 1.0
-    # the floor the dense map smeared into the segment adds grey, not hue: still the cup
-    (again,) = name_unknown_objects(
-        [dataclass_replace(streaked, "unknown object 1")], image, K, MODELS
+    # the floor the dense map smeared into the segment adds grey, not hue: still the cup; made
+    # again of the points in the box round its colours, it loses the streak
+    streak = [dataclass_replace(streaked, "unknown object 1")]
+    (kept,) = name_unknown_objects(streak, image, K, MODELS)
+    (trimmed,) = name_unknown_objects(
+        streak, image, K, MODELS, remake=(np.array([0.0, -1.0, 0.0]), ObjectOptions(radius=None))
     )
-    assert again.label == "cup"
+    assert kept.label == trimmed.label == "cup"
+    u = (kept.xyz @ K.T)[:, 0] / kept.xyz[:, 2]
+    u_trimmed = (trimmed.xyz @ K.T)[:, 0] / trimmed.xyz[:, 2]
+    assert u.max() > 150 and u_trimmed.max() < 90 and u_trimmed.min() < 45
     # a gray image names nothing; neither do no models
     gray = image.mean(axis=2).astype(np.uint8)
     assert (

@@ -40,7 +40,7 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-from scenespeak.perception.objects import SceneObject
+from scenespeak.perception.objects import ObjectOptions, SceneObject, make_object
 
 __all__ = [
     "BINS",
@@ -250,15 +250,30 @@ def name_by_colour(
 
 def _object_pixels(
     obj: SceneObject, image: NDArray[np.uint8], camera: NDArray[np.float64]
-) -> tuple[NDArray[np.uint8], NDArray[np.float64]]:
-    """The image's RGB values at the object's points (projected by the 3 × 3 ``camera``), and
-    those pixels' positions (column, row)."""
+) -> tuple[NDArray[np.uint8], NDArray[np.float64], NDArray[np.intp]]:
+    """The image's RGB values at the object's points (projected by the 3 × 3 ``camera``),
+    those pixels' positions (column, row), and which of the object's points they are."""
     xyz = np.asarray(obj.xyz, np.float64)
-    uvw = xyz[xyz[:, 2] > 1e-6] @ camera.T
+    idx = np.flatnonzero(xyz[:, 2] > 1e-6)
+    uvw = xyz[idx] @ camera.T
     uv = np.rint(uvw[:, :2] / uvw[:, 2:3]).astype(np.intp)
     h, w = image.shape[:2]
-    uv = uv[(uv[:, 0] >= 0) & (uv[:, 0] < w) & (uv[:, 1] >= 0) & (uv[:, 1] < h)]
-    return np.asarray(image[uv[:, 1], uv[:, 0]], np.uint8).reshape(-1, 3), uv.astype(np.float64)
+    ok = (uv[:, 0] >= 0) & (uv[:, 0] < w) & (uv[:, 1] >= 0) & (uv[:, 1] < h)
+    uv, idx = uv[ok], idx[ok]
+    rgb = np.asarray(image[uv[:, 1], uv[:, 0]], np.uint8).reshape(-1, 3)
+    return rgb, uv.astype(np.float64), idx.astype(np.intp)
+
+
+#: The points kept for an object named by colour lie in the box round its chromatic pixels
+#: (2–98 %), grown by this share of its size on each side.
+BOX_GROW = 0.1
+
+
+def _in_colour_box(uv: NDArray[np.float64], chroma: NDArray[np.bool_]) -> NDArray[np.bool_]:
+    """Which pixels lie in the (grown) box round the chromatic ones."""
+    lo, hi = np.percentile(uv[chroma], 2, axis=0), np.percentile(uv[chroma], 98, axis=0)
+    pad = BOX_GROW * (hi - lo) + 1.0
+    return np.asarray(np.all((uv >= lo - pad) & (uv <= hi + pad), axis=1))
 
 
 def name_unknown_objects(
@@ -267,6 +282,7 @@ def name_unknown_objects(
     camera: NDArray[np.float64],
     models: Mapping[str, ColourModel],
     options: ColourOptions | None = None,
+    remake: tuple[NDArray[np.float64], ObjectOptions] | None = None,
 ) -> tuple[SceneObject, ...]:
     """``objects`` with the unknown ones that colour and shape name (:func:`name_by_colour`)
     renamed, instances numbered ("cup", "cup 2") and the unknown ones left renumbered.
@@ -282,6 +298,11 @@ def name_unknown_objects(
     models : mapping
         Label → :class:`ColourModel` (:meth:`ObjectDatabase.colour_models`).
     options : ColourOptions, optional
+    remake : (up, ObjectOptions), optional
+        With it, a named object is made again (:func:`~scenespeak.perception.objects.
+        make_object`) of only its points inside the box round its chromatic pixels: the dense
+        map smears an object's depth over a plain floor beside it, and those points belong to
+        no object.
     """
     o = options or ColourOptions()
     img = np.asarray(image)
@@ -291,7 +312,7 @@ def name_unknown_objects(
     for i, obj in enumerate(out):
         if not obj.label.startswith("unknown object"):
             continue
-        rgb, uv = _object_pixels(obj, img[..., :3], np.asarray(camera, np.float64))
+        rgb, uv, idx = _object_pixels(obj, img[..., :3], np.asarray(camera, np.float64))
         chroma = chromatic_pixels(rgb)
         if int(chroma.sum()) < o.min_pixels:
             continue
@@ -300,8 +321,14 @@ def name_unknown_objects(
             continue
         label, d1, d2 = named
         note = f"named by colour and shape (distance {d1:.2f}, next object {d2:.2f})"
+        base = obj
+        if remake is not None:
+            keep = idx[_in_colour_box(uv, chroma)]
+            made = make_object(label, obj.xyz[keep], remake[0], source="segment", options=remake[1])
+            if isinstance(made, SceneObject):
+                base = made
         out[i] = dataclasses.replace(
-            obj, label=label, name=label, confidence=0.5, notes=(*obj.notes, note)
+            base, label=label, name=label, confidence=0.5, notes=(*base.notes, note)
         )
     return tuple(_renumbered(out))
 
