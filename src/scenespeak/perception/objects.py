@@ -97,7 +97,8 @@ class SceneObject:
         Convex hull in the horizontal plane, counter-clockwise, M >= 3 (a sliver polygon of
         width :data:`SLIVER_WIDTH` for degenerate point sets; see ``notes``).
     centroid : (3,) float64
-        Mean of ``xyz``.
+        Mean of ``xyz`` (the region stage moves it to the hull's area centroid on the plane,
+        :func:`scenespeak.perception.scene_regions.volume_centre`).
     heights : (N,) float64
         Heights of the points along ``up`` (metres; larger is higher).
     n_points : int

@@ -25,6 +25,8 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
+from scenespeak.geometry.frames import plane_basis
+from scenespeak.geometry.polygons import polygon_area, polygon_centroid
 from scenespeak.perception.objects import SceneObject, Skipped, make_object
 from scenespeak.perception.regions import (
     RegionOptions,
@@ -50,6 +52,7 @@ __all__ = [
     "SceneInputs",
     "detection_confidence",
     "objects_from_regions",
+    "volume_centre",
     "vote_segments",
 ]
 
@@ -367,7 +370,40 @@ def objects_from_regions(
         objects += unknown_segments(
             geo.points, residual, inp.keypoints_xy, claimed, inp.up, opts, work.kw
         )
-    return objects, skipped, geo
+    return [volume_centre(o, inp.up) for o in objects], skipped, geo
+
+
+def volume_centre(obj: SceneObject, up: NDArray[np.float64]) -> SceneObject:
+    """``obj`` with its centroid moved to an estimate of the centre of its volume.
+
+    A region's points lie on the faces the camera sees, so their mean sits in front of the
+    volume's centre by up to half the object's depth (9-11 cm for a 19 cm deep shoebox seen
+    from the front: all of the dev set's centroid errors above 8 cm). The convex hull of the
+    points on the plane spans what is seen of the footprint (the top face of a box lower than
+    the camera, the front half of a cylinder), so the centroid becomes the hull's area
+    centroid on the plane, at the points' mean height. Objects placed from dense or segment
+    pixels only; keypoint objects and degenerate hulls keep the mean of their points.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from scenespeak.perception.objects import make_object
+    >>> rng = np.random.default_rng(0)
+    >>> front = np.c_[rng.uniform(-0.1, 0.1, 200), rng.uniform(0.0, 0.1, 200), np.full(200, 1.0)]
+    >>> top = np.c_[rng.uniform(-0.1, 0.1, 20), np.zeros(20), rng.uniform(1.0, 1.2, 20)]
+    >>> up = np.array([0.0, -1.0, 0.0])
+    >>> obj = make_object("box", np.r_[front, top], up, source="dense", outliers="none")
+    >>> round(float(obj.centroid[2]), 2), round(float(volume_centre(obj, up).centroid[2]), 2)
+    (1.01, 1.08)
+    """
+    if obj.source not in ("dense", "segment") or len(obj.hull) < 3 or obj.n_points < 3:
+        return obj
+    if float(abs(polygon_area(obj.hull))) < 1e-6:  # a sliver: no footprint to speak of
+        return obj
+    basis = plane_basis(up)
+    cx, cy = polygon_centroid(obj.hull)
+    centre = cx * basis[0] + cy * basis[1] + float(np.mean(obj.heights)) * basis[2]
+    return dataclasses.replace(obj, centroid=centre)
 
 
 def _known_object(work: _Work, i: int, det: Any) -> SceneObject | Skipped:
