@@ -143,6 +143,34 @@ def test_convex_chain_walk_matches_reference(seed: int, n: int, m: int, directio
             assert_close(got[k], ref)
 
 
+@pytest.mark.parametrize("start", range(8))
+def test_convex_chain_walk_with_level_runs_of_vertices(start: int) -> None:
+    """Collinear vertices parallel to the lines (a rectangle with its edges' midpoints), the
+    ring starting anywhere: the lowest and highest vertex are found in every direction."""
+    ring = np.array(
+        [
+            [0.0, 0.0],
+            [1.0, 0.0],
+            [2.0, 0.0],
+            [2.0, 0.5],
+            [2.0, 1.0],
+            [1.0, 1.0],
+            [0.0, 1.0],
+            [0.0, 0.5],
+        ]
+    )
+    a = forces.prepare(np.roll(ring, start, axis=0), "a")
+    b = forces.prepare(np.roll(ring, -start, axis=0) * 0.5 + np.array([3.0, 0.25]), "b")
+    assert a.convex and b.convex
+    got = kernel.sweep_pairs(
+        [a, b], [(0, 1), (1, 0)], [kernel.KernelSpec(0.0), kernel.KernelSpec(2.0)], 8
+    )
+    for k, (x, y) in enumerate([(a, b), (b, a)]):
+        with np.errstate(all="ignore"):
+            ref = _edge_pair_histograms(x, y, [_Kernel(0.0), _Kernel(2.0)], 8)
+        assert_close(got[k], ref)
+
+
 def test_kernel_matches_reference_on_masks() -> None:
     shape = (256, 256)
     rng = np.random.default_rng(3)

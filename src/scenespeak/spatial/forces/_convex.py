@@ -57,6 +57,24 @@ def _descend(pts: np.ndarray, k: int, cs: tuple[float, float], r: tuple[int, int
 
 
 @jit
+def _lowest_highest(
+    pts: np.ndarray, cs: tuple[float, float], r: tuple[int, int]
+) -> tuple[int, int]:
+    """The first lowest and first highest vertex of ``lo_g:hi_g = r`` (every vertex looked at)."""
+    lo = r[0]
+    hi = r[0]
+    v_lo = _vs(pts, lo, cs)[0]
+    v_hi = v_lo
+    for k in range(r[0] + 1, r[1]):
+        v = _vs(pts, k, cs)[0]
+        if v < v_lo:
+            lo, v_lo = k, v
+        if v > v_hi:
+            hi, v_hi = k, v
+    return lo, hi
+
+
+@jit
 def track_extremes(
     cs: tuple[float, float],
     pts: np.ndarray,
@@ -68,17 +86,19 @@ def track_extremes(
     """The lowest and highest vertex (``low_high[g]``) and their ``v`` (``extent[g]``) of every
     region with ``chained[g]``, ``scratch = (low_high, extent)``: every vertex looked at in
     the first direction, then a walk from the previous direction's (they move by about
-    ``n / directions`` vertices from one direction to the next)."""
+    ``n / directions`` vertices from one direction to the next; a level run of vertices,
+    parallel to the lines, lies only at the lowest or highest ``v`` of a convex ring, so the
+    walk cannot stop inside one elsewhere)."""
     low_high, extent = scratch
     for g in range(region_start.size - 1):
         if not chained[g]:
             continue
         r = (region_start[g], region_start[g + 1])
-        if first:
-            low_high[g, 0] = r[0]
-            low_high[g, 1] = r[0]
-        low_high[g, 0] = _descend(pts, low_high[g, 0], cs, r, False)
-        low_high[g, 1] = _descend(pts, low_high[g, 1], cs, r, True)
+        if first:  # every vertex (a walk could stop inside a level run of vertices)
+            low_high[g, 0], low_high[g, 1] = _lowest_highest(pts, cs, r)
+        else:
+            low_high[g, 0] = _descend(pts, low_high[g, 0], cs, r, False)
+            low_high[g, 1] = _descend(pts, low_high[g, 1], cs, r, True)
         extent[g, 0] = _vs(pts, low_high[g, 0], cs)[0]
         extent[g, 1] = _vs(pts, low_high[g, 1], cs)[0]
 
