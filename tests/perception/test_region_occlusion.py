@@ -19,7 +19,7 @@ import pytest
 
 from scenespeak.perception.objects import SceneObject
 
-pytestmark = pytest.mark.slow  # renders a scene and two training views (~15 s idle)
+pytestmark = pytest.mark.slow  # renders a scene and two training views (~5 s idle, ~40 s loaded)
 
 BOOK_Z, BOX_Z = 0.75, 1.9
 
