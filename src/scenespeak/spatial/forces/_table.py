@@ -19,34 +19,46 @@ BUCKET_SORT_FROM = 96
 
 
 @jit
+def _edge_row(
+    c: float, s: float, pts: np.ndarray, nxt: np.ndarray, e: int, out: np.ndarray, j: int
+) -> float:
+    """Write edge ``e``'s row for direction (c, s) into ``out[j]``; returns its first ``v``.
+
+    The row is ``[v_lo, v_hi, s(v_lo), ds/dv, sign(dv)]`` in the region's frame (``pts`` are
+    relative to the region's origin).
+    """
+    f = nxt[e]
+    s0 = pts[e, 0] * c + pts[e, 1] * s
+    v0 = pts[e, 1] * c - pts[e, 0] * s
+    s1 = pts[f, 0] * c + pts[f, 1] * s
+    v1 = pts[f, 1] * c - pts[f, 0] * s
+    dv = v1 - v0
+    if dv < 0.0:
+        out[j, 0] = v1
+        out[j, 1] = v0
+        out[j, 2] = s1
+        out[j, 4] = -1.0
+    else:
+        out[j, 0] = v0
+        out[j, 1] = v1
+        out[j, 2] = s0
+        out[j, 4] = 1.0 if dv > 0.0 else 0.0
+    out[j, 3] = (s1 - s0) / dv if dv != 0.0 else 0.0
+    return v0
+
+
+@jit
 def _project(
     c: float, s: float, pts: np.ndarray, nxt: np.ndarray, lo_g: int, hi_g: int, tab: np.ndarray
 ) -> tuple[float, float]:
     """Rows ``lo_g:hi_g`` of the edge table for direction (c, s); returns the ``v`` range.
 
-    ``tab[e]`` is ``[v_lo, v_hi, s(v_lo), ds/dv, sign(dv)]`` of edge ``e`` in its region's
-    frame (``pts`` are relative to the region's origin).
+    ``tab[e]`` is edge ``e``'s row (:func:`_edge_row`).
     """
     vmin = math.inf
     vmax = -math.inf
     for e in range(lo_g, hi_g):
-        f = nxt[e]
-        s0 = pts[e, 0] * c + pts[e, 1] * s
-        v0 = pts[e, 1] * c - pts[e, 0] * s
-        s1 = pts[f, 0] * c + pts[f, 1] * s
-        v1 = pts[f, 1] * c - pts[f, 0] * s
-        dv = v1 - v0
-        if dv < 0.0:
-            tab[e, 0] = v1
-            tab[e, 1] = v0
-            tab[e, 2] = s1
-            tab[e, 4] = -1.0
-        else:
-            tab[e, 0] = v0
-            tab[e, 1] = v1
-            tab[e, 2] = s0
-            tab[e, 4] = 1.0 if dv > 0.0 else 0.0
-        tab[e, 3] = (s1 - s0) / dv if dv != 0.0 else 0.0
+        v0 = _edge_row(c, s, pts, nxt, e, tab, e)
         vmin = min(vmin, v0)
         vmax = max(vmax, v0)
     return vmin, vmax
@@ -143,24 +155,7 @@ def _rows(
     vmin = math.inf
     vmax = -math.inf
     for j in range(lo_g, hi_g):
-        e = perm[j]
-        f = nxt[e]
-        s0 = pts[e, 0] * c + pts[e, 1] * s
-        v0 = pts[e, 1] * c - pts[e, 0] * s
-        s1 = pts[f, 0] * c + pts[f, 1] * s
-        v1 = pts[f, 1] * c - pts[f, 0] * s
-        dv = v1 - v0
-        if dv < 0.0:
-            srt[j, 0] = v1
-            srt[j, 1] = v0
-            srt[j, 2] = s1
-            srt[j, 4] = -1.0
-        else:
-            srt[j, 0] = v0
-            srt[j, 1] = v1
-            srt[j, 2] = s0
-            srt[j, 4] = 1.0 if dv > 0.0 else 0.0
-        srt[j, 3] = (s1 - s0) / dv if dv != 0.0 else 0.0
+        v0 = _edge_row(c, s, pts, nxt, perm[j], srt, j)
         vmin = min(vmin, v0)
         vmax = max(vmax, v0)
     return vmin, vmax
