@@ -186,7 +186,7 @@ def _mask_cases(w: Writer) -> None:
     mask_b[2:8, 12:18] = True
     for value in (np.inf, np.nan, -1.0, 1e300, "0.5", None, 1j):
         call = _call(forces, "force_histogram", mask_a, mask_b, directions=16, mask_tolerance=value)
-        # None is documented ("float | None": the outline is not simplified): a sane histogram
+        # None is documented ("float | None": the measured outline rule): a sane histogram
         w.add(
             Case(
                 f"api/force_histogram/mask_tolerance={value!r}",
