@@ -13,6 +13,7 @@ pass on easy scenes alone).
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 import gc
 import importlib
@@ -260,17 +261,30 @@ def test_labels_with_percent_signs_and_braces_are_said_as_given() -> None:
 
 
 def test_results_are_ordinary_relations() -> None:
-    """The relations built through ``__dict__`` behave like ``Relation(...)``."""
+    """The relations and histograms made by the mutable twins (``__class__`` assignment)
+    behave like ``Relation(...)`` and ``PairHistograms(...)``: their type, slots, equality,
+    pickling, copying, ``replace`` and frozenness."""
     sq = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
     (rel, hist), _ = language.relate_objects([sq, sq + np.array([3.0, 0.2])], names=["hat", "mug"])
+    assert type(rel) is language.Relation and type(hist) is language.PairHistograms
     fields = [f.name for f in dataclasses.fields(language.Relation)]
-    assert list(vars(rel)) == fields
-    assert rel == language.Relation(**{f: getattr(rel, f) for f in fields})
-    assert pickle.loads(pickle.dumps(rel)) == rel
+    assert list(language.Relation.__slots__) == fields
+    assert not hasattr(rel, "__dict__") and not hasattr(hist, "__dict__")
+    made = language.Relation(**{f: getattr(rel, f) for f in fields})
+    assert rel == made and made == rel and repr(rel) == repr(made)
+    assert rel != dataclasses.replace(made, confidence=rel.confidence + 1.0)
+    for twin in (pickle.loads(pickle.dumps(rel)), copy.copy(rel), copy.deepcopy(rel)):
+        assert type(twin) is language.Relation and twin == rel
+        assert twin.to_dict() == rel.to_dict()
     assert dataclasses.replace(rel, argument="cap").argument == "cap"
     with pytest.raises(dataclasses.FrozenInstanceError):
         rel.argument = "cap"  # type: ignore[misc]
-    assert [f.name for f in dataclasses.fields(hist)] == list(vars(hist))
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        hist.hybrid = True  # type: ignore[misc]
+    back = pickle.loads(pickle.dumps(hist))
+    assert type(back) is language.PairHistograms and back.hybrid == hist.hybrid
+    assert back.f0.tobytes() == hist.f0.tobytes() and back.area_b == hist.area_b
+    assert [f.name for f in dataclasses.fields(hist)] == list(language.PairHistograms.__slots__)
     assert rel.to_dict()["sentence"] == rel.sentence
 
 

@@ -11,7 +11,7 @@ from numpy.typing import ArrayLike, NDArray
 from scenespeak.errors import InputError, ScenespeakError
 from scenespeak.geometry.polygons import as_polygon, intersection_area, polygon_area
 from scenespeak.spatial.degrees import DIRECTIONS, DirectionDegree, many_degrees
-from scenespeak.spatial.language.relation import Relation
+from scenespeak.spatial.language.relation import Relation, _twin
 from scenespeak.spatial.language.rules import (
     _as_histogram,
     _check_something,
@@ -44,7 +44,7 @@ def _histograms(
     return f0, np.asarray(f02, dtype=np.float64), True
 
 
-@dataclass(frozen=True, eq=False)
+@dataclass(frozen=True, eq=False, slots=True)
 class PairHistograms:
     """The force histograms of one pair of polygons and how much their footprints overlap.
 
@@ -110,6 +110,11 @@ class PairHistograms:
             self.area_b,
             self.area_a,
         )
+
+
+#: :class:`PairHistograms`' mutable twin (:func:`~.relation._twin`), for
+#: :func:`~.relate.relate_objects`' fast fill.
+_PairHistogramsFill = _twin(PairHistograms)
 
 
 def pair_histograms(a: ArrayLike, b: ArrayLike, *, directions: int = 180) -> PairHistograms:

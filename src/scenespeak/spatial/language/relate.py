@@ -4,7 +4,9 @@ from __future__ import annotations
 
 import contextlib
 import gc
+import itertools
 from collections.abc import Iterator, Sequence
+from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -22,8 +24,13 @@ from scenespeak.spatial.language.batch import (
     sector_shares,
     sentence_templates,
 )
-from scenespeak.spatial.language.pairs import PairHistograms, pair_histograms, relation_of_pair
-from scenespeak.spatial.language.relation import Relation
+from scenespeak.spatial.language.pairs import (
+    PairHistograms,
+    _PairHistogramsFill,
+    pair_histograms,
+    relation_of_pair,
+)
+from scenespeak.spatial.language.relation import Relation, _RelationFill
 from scenespeak.spatial.language.scenepairs import ScenePairs, scene_pairs
 from scenespeak.spatial.language.thresholds import DEFAULT_THRESHOLDS, Thresholds
 from scenespeak.spatial.language.vertical import _extent, _heights, _vertical_rule
@@ -173,20 +180,24 @@ def _ordered_relations(
         decisions.confidence,
     )
     confidence = np.minimum(np.maximum(confidence, 0.0), 1.0)
-    # One Python float per number: those of a pair serve both its rows.
-    shared = [deg0, deg2, 0.5 * (deg0 + deg2), dev0, dev2, coverage, overlap[:p]]
-    shared += [referent_overlap[:p], scene.intersection, area_a[:p], area_b[:p]]
-    numbers = (
-        np.column_stack(shared).tolist(),
-        np.column_stack([confidence, decisions.deviation, decisions.extends_share]).tolist(),
+    rows = _Rows(
+        names=([labels[k] for k in argument.tolist()], [labels[k] for k in referent.tolist()]),
+        words=_words(decisions),
+        vertical=vertical,
+        hybrid=scene.hybrid.tolist(),
+        own=(confidence, decisions.deviation, decisions.extends_share),
+        degrees=(deg0, deg2, 0.5 * (deg0 + deg2), dev0, dev2),
+        pair=(coverage, overlap[:p], referent_overlap[:p]),
+        areas=(scene.intersection, area_a[:p], area_b[:p]),
+        histograms=(scene.f0, back0, scene.f2, back2),
     )
-    names = ([labels[k] for k in argument.tolist()], [labels[k] for k in referent.tolist()])
-    words = (names, _words(decisions), vertical, scene.hybrid.tolist())
     n = len(labels)
-    forward: list[int] = (scene.first * (n - 1) + scene.second - 1).tolist()
-    places = (forward, (scene.second * (n - 1) + scene.first).tolist())
-    histograms = (list(scene.f0) + list(back0), list(scene.f2) + list(back2))
-    return _build(places, words, numbers, histograms, sentence_templates(decisions))
+    place = np.concatenate(
+        [scene.first * (n - 1) + scene.second - 1, scene.second * (n - 1) + scene.first]
+    )
+    order = np.empty(2 * p, dtype=np.intp)
+    order[place] = np.arange(2 * p)
+    return _build(rows, order.tolist(), sentence_templates(decisions))
 
 
 def _half_turned(h: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -259,103 +270,112 @@ def _verticals(
     return found
 
 
+@dataclass(frozen=True)
+class _Rows:
+    """What :func:`_build` makes the results of: rows ``0..P-1`` are the pairs, ``P..2P-1``
+    the same pairs the other way round (lists of ``2P``, or arrays of ``P`` shared by both
+    rows of a pair, in the pairs' order)."""
+
+    #: The argument's and the referent's label of every row.
+    names: tuple[list[str], list[str]]
+    #: Kind, primary, secondary, hedge, secondary hedge of every row (:func:`_words`).
+    words: tuple[list[str | None], ...]
+    #: The vertical word of every row, or None.
+    vertical: list[str | None]
+    #: Whether each pair's ``f2`` is the hybrid F02 (``P``).
+    hybrid: list[bool]
+    #: Confidence, deviation and extends share of every row (``2P``).
+    own: tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]
+    #: ``(P, 4)``: degrees from F0, from F2, their mean; deviations of F0 and of F2.
+    degrees: tuple[NDArray[np.float64], ...]
+    #: Coverage, overlap and referent overlap of each pair (``P``).
+    pair: tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]
+    #: Intersection and the two areas of each pair (``P``).
+    areas: tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]
+    #: ``(P, directions)``: F0, F0 half-turned, F2, F2 half-turned.
+    histograms: tuple[NDArray[np.float64], ...]
+
+
 def _build(
-    places: tuple[list[int], list[int]],
-    words: tuple[
-        tuple[list[str], list[str]], tuple[list[str | None], ...], list[str | None], list[bool]
-    ],
-    numbers: tuple[list[list[float]], list[list[float]]],
-    histograms: tuple[list[NDArray[np.float64]], list[NDArray[np.float64]]],
-    templates: tuple[list[str], dict[str, str]],
+    rows: _Rows, order: list[int], templates: tuple[list[str], dict[str, str]]
 ) -> list[tuple[Relation, PairHistograms]]:
-    """Each row's :class:`Relation` and :class:`PairHistograms`, at its place in the output.
+    """Each row's :class:`Relation` and :class:`PairHistograms`, in the output ``order`` (the
+    row at each place).
 
     The objects are the ones ``Relation(...)`` and ``PairHistograms(...)`` make (the same
-    fields, in the same order); they are filled through ``__dict__`` because a frozen
-    dataclass' ``__init__`` sets each of its 23 fields through ``object.__setattr__``, which
-    would cost more than the rule base itself. Row ``k`` (the pair) and row ``k + P`` (the
-    same pair the other way round) are built in the same step: their dicts hold the same
-    floats, turned (B's left is A's right).
+    fields, in the same order). A frozen dataclass' ``__init__`` sets each field through
+    ``object.__setattr__``, which for 23 fields would cost more than the rule base itself;
+    they are made column by column instead (``map`` over the columns) by the classes'
+    mutable twins (:func:`~.relation._twin`: the same slots, an ``__init__`` that stores
+    them directly), then turned into the frozen classes by ``__class__`` assignment. The
+    two rows of a pair hold the same float objects (turned: B's left is A's right).
     """
-    (arguments, referents), (kinds, primaries, secondaries, hedges, sec_hedges), verticals = words[
-        :3
-    ]
-    hybrids = words[3]
-    shared, own = numbers
-    f0s, f2s = histograms
-    horizontals, sentences = _sentences(arguments, referents, verticals, templates)
-    p = len(shared)
-    new = object.__new__
-    out: list[tuple[Relation, PairHistograms]] = [None] * (2 * p)  # type: ignore[list-item]
-    for k, v, hybrid, here, there in zip(range(p), shared, hybrids, *places, strict=True):
-        (d0r, d0b, d0l, d0f, d2r, d2b, d2l, d2f, dr, db, dl, df) = v[:12]
-        (e0r, e0b, e0l, e0f, e2r, e2b, e2l, e2f, coverage, ov, rov, inter, aa, ab) = v[12:]
-        x = own[k]
-        rel = new(Relation)
-        rel.__dict__.update(
-            argument=arguments[k],
-            referent=referents[k],
-            primary=primaries[k],
-            secondary=secondaries[k],
-            hedge=hedges[k],
-            sentence=sentences[k],
-            confidence=x[0],
-            secondary_hedge=sec_hedges[k],
-            kind=kinds[k],
-            horizontal_sentence=horizontals[k],
-            degrees0={"right": d0r, "behind": d0b, "left": d0l, "front": d0f},
-            degrees2={"right": d2r, "behind": d2b, "left": d2l, "front": d2f},
-            degrees={"right": dr, "behind": db, "left": dl, "front": df},
-            deviation0={"right": e0r, "behind": e0b, "left": e0l, "front": e0f},
-            deviation2={"right": e2r, "behind": e2b, "left": e2l, "front": e2f},
-            deviation=x[1],
-            coverage=coverage,
-            extends_share=x[2],
-            overlap=ov,
-            referent_overlap=rov,
-            vertical=verticals[k],
-            hybrid=hybrid,
-            frame="object",
+    arguments, referents = rows.names
+    kinds, primaries, secondaries, hedges, sec_hedges = rows.words
+    horizontals, sentences = _sentences(arguments, referents, rows.vertical, templates)
+    confidence, deviation, extends = (x.tolist() for x in rows.own)
+    coverage, ov, rov = (x.tolist() for x in rows.pair)
+    inter, aa, ab = (x.tolist() for x in rows.areas)
+    hybrid = rows.hybrid + rows.hybrid
+    rels = list(
+        map(
+            _RelationFill,
+            arguments,
+            referents,
+            primaries,
+            secondaries,
+            hedges,
+            sentences,
+            confidence,
+            sec_hedges,
+            kinds,
+            horizontals,
+            *(_direction_dicts(x) for x in rows.degrees),
+            deviation,
+            coverage + coverage,
+            extends,
+            ov + rov,
+            rov + ov,
+            rows.vertical,
+            hybrid,
+            itertools.repeat("object"),
         )
-        hist = new(PairHistograms)
-        hist.__dict__.update(
-            f0=f0s[k], f2=f2s[k], hybrid=hybrid, intersection=inter, area_a=aa, area_b=ab
+    )
+    f0, back0, f2, back2 = rows.histograms
+    hists = list(
+        map(
+            _PairHistogramsFill,
+            [*f0, *back0],
+            [*f2, *back2],
+            hybrid,
+            inter + inter,
+            aa + ab,
+            ab + aa,
         )
-        out[here] = (rel, hist)
-        r = k + p
-        x = own[r]
-        rel = new(Relation)
-        rel.__dict__.update(
-            argument=arguments[r],
-            referent=referents[r],
-            primary=primaries[r],
-            secondary=secondaries[r],
-            hedge=hedges[r],
-            sentence=sentences[r],
-            confidence=x[0],
-            secondary_hedge=sec_hedges[r],
-            kind=kinds[r],
-            horizontal_sentence=horizontals[r],
-            degrees0={"right": d0l, "behind": d0f, "left": d0r, "front": d0b},
-            degrees2={"right": d2l, "behind": d2f, "left": d2r, "front": d2b},
-            degrees={"right": dl, "behind": df, "left": dr, "front": db},
-            deviation0={"right": e0l, "behind": e0f, "left": e0r, "front": e0b},
-            deviation2={"right": e2l, "behind": e2f, "left": e2r, "front": e2b},
-            deviation=x[1],
-            coverage=coverage,
-            extends_share=x[2],
-            overlap=rov,
-            referent_overlap=ov,
-            vertical=verticals[r],
-            hybrid=hybrid,
-            frame="object",
-        )
-        hist = new(PairHistograms)
-        hist.__dict__.update(
-            f0=f0s[r], f2=f2s[r], hybrid=hybrid, intersection=inter, area_a=ab, area_b=aa
-        )
-        out[there] = (rel, hist)
+    )
+    out: list[tuple[Relation, PairHistograms]] = []
+    add = out.append
+    for r in order:
+        rel, hist = rels[r], hists[r]
+        rel.__class__ = Relation
+        hist.__class__ = PairHistograms
+        add((rel, hist))
     return out
+
+
+def _direction_dicts(x: NDArray[np.float64]) -> list[dict[str, float]]:
+    """The ``{"right": ..., "behind": ..., "left": ..., "front": ...}`` of every row: the
+    pairs' ``(P, 4)`` values, then the same floats turned for the pairs the other way round."""
+    flat = x.ravel().tolist()
+    columns = flat[0::4], flat[1::4], flat[2::4], flat[3::4]
+    forward = [
+        {"right": r, "behind": b, "left": lf, "front": f}
+        for r, b, lf, f in zip(*columns, strict=True)
+    ]
+    return forward + [
+        {"right": lf, "behind": f, "left": r, "front": b}
+        for r, b, lf, f in zip(*columns, strict=True)
+    ]
 
 
 def _sentences(
