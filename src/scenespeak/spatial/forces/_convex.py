@@ -23,20 +23,20 @@ import math
 
 import numpy as np
 
-from scenespeak.spatial.forces._jit import jit
+from scenespeak.spatial.forces._jit import jit, jit_inline
 
 # As in _sweep (the reference's _TAYLOR_RATIO).
 TAYLOR_RATIO = 1e-3
 
 
-@jit
+@jit_inline
 def _vs(pts: np.ndarray, k: int, cs: tuple[float, float]) -> tuple[float, float]:
     """``(v, s)`` of vertex k for direction ``cs = (cos θ, sin θ)`` (across, along the lines)."""
     c, s = cs
     return pts[k, 1] * c - pts[k, 0] * s, pts[k, 0] * c + pts[k, 1] * s
 
 
-@jit
+@jit_inline
 def _descend(pts: np.ndarray, k: int, cs: tuple[float, float], r: tuple[int, int], up: bool) -> int:
     """From vertex k, the neighbouring vertices while ``v`` falls (rises if ``up``): the
     lowest (highest) vertex of a convex ring in ``lo_g:hi_g = r`` from a vertex near it."""
@@ -56,7 +56,7 @@ def _descend(pts: np.ndarray, k: int, cs: tuple[float, float], r: tuple[int, int
         return k
 
 
-@jit
+@jit_inline
 def _lowest_highest(
     pts: np.ndarray, cs: tuple[float, float], r: tuple[int, int]
 ) -> tuple[int, int]:
@@ -74,7 +74,7 @@ def _lowest_highest(
     return lo, hi
 
 
-@jit
+@jit_inline
 def track_extremes(
     cs: tuple[float, float],
     pts: np.ndarray,
@@ -103,7 +103,7 @@ def track_extremes(
         extent[g, 1] = _vs(pts, low_high[g, 1], cs)[0]
 
 
-@jit
+@jit_inline
 def _step(k: int, step: int, lo_g: int, hi_g: int) -> int:
     """The next vertex along a chain: ``k + step`` cyclically in ``lo_g:hi_g``."""
     k += step
@@ -114,48 +114,36 @@ def _step(k: int, step: int, lo_g: int, hi_g: int) -> int:
     return k
 
 
-@jit
+@jit_inline
 def _psi2(u: float) -> float:
     """Ψ of gravitational forces, ``u - u log u`` (0 at u = 0)."""
     return u - u * math.log(u) if u > 0.0 else 0.0
 
 
-@jit
-def _edge(
+@jit_inline
+def _chain(
     pts: np.ndarray,
     cs: tuple[float, float],
     r: tuple[int, int, int, int],
     step: int,
     shift: tuple[float, float],
-    at: tuple[int, float, float],
-) -> tuple[float, float, int, float, float, float]:
-    """The chain's edge from the breakpoint ``at = (vertex, v, s)`` (shifted by ``shift``):
-    ``(v, s, next vertex, its v, its s, ds/dv)``, the next ``v`` at least ``v`` (the running
-    maximum that keeps a chain's breakpoints in order)."""
-    k, v, s = at
-    n = _step(k, step, r[0], r[1])
-    vn, sn = _vs(pts, n, cs)
-    vn = max(vn + shift[0], v)
-    sn += shift[1]
-    return v, s, n, vn, sn, (sn - s) / (vn - v) if vn > v else 0.0
+    span: tuple[float, float],
+    out: np.ndarray,
+) -> None:
+    """One chain's breakpoints over the lines ``span = (t, t_end)``, into ``out`` (3 rows).
 
-
-@jit
-def _first_edge(
-    pts: np.ndarray,
-    cs: tuple[float, float],
-    r: tuple[int, int, int, int],
-    step: int,
-    shift: tuple[float, float],
-    t: float,
-) -> tuple[float, float, int, float, float, float]:
-    """:func:`_edge` of the chain's edge whose range of lines holds ``t`` (from the lowest
-    vertex up; the slope computed for that edge only)."""
+    ``out[0, i]``, ``out[1, i]``: ``v`` and ``s`` of the chain's i-th breakpoint, from the
+    start of the edge whose range of lines holds ``t`` to the first vertex at or above
+    ``t_end`` (``v`` made non-decreasing by a running maximum, B shifted into A's frame by
+    ``shift``); ``out[2, i]``: the slope ``ds/dv`` of edge i (0 for an edge of no height).
+    Each edge's slope is computed once per direction, for both merges the chain takes part in.
+    """
+    t, t_end = span
     k = r[2]
     v, s = _vs(pts, k, cs)
     v += shift[0]
     s += shift[1]
-    while True:
+    while True:  # to the edge whose range of lines holds t
         n = _step(k, step, r[0], r[1])
         if n == r[3]:
             break
@@ -163,10 +151,24 @@ def _first_edge(
         if vn > t:
             break
         k, v, s = n, vn, _vs(pts, n, cs)[1] + shift[1]
-    return _edge(pts, cs, r, step, shift, (k, v, s))
+    out[0, 0] = v
+    out[1, 0] = s
+    m = 0
+    while True:
+        n = _step(k, step, r[0], r[1])
+        vn, sn = _vs(pts, n, cs)
+        vn = max(vn + shift[0], v)
+        sn += shift[1]
+        out[2, m] = (sn - s) / (vn - v) if vn > v else 0.0
+        m += 1
+        out[0, m] = vn
+        out[1, m] = sn
+        if n == r[3] or vn >= t_end:
+            return
+        k, v, s = n, vn, sn
 
 
-@jit
+@jit_inline
 def _same_side_f2(
     a0: float, a1: float, weight: float, psi: tuple[float, bool]
 ) -> tuple[float, float, bool]:
@@ -184,7 +186,7 @@ def _same_side_f2(
     return weight * ((p1 - p0) / h), p1, True
 
 
-@jit
+@jit_inline
 def _interval(
     d: float, dn: float, weight: float, psi: tuple[float, bool]
 ) -> tuple[float, float, float, float, float, bool]:
@@ -214,32 +216,22 @@ def _interval(
     return f0, f2, 0.0, 0.0, p1, known
 
 
-@jit
+@jit_inline
 def chain_pair(
-    pts: np.ndarray,
-    cs: tuple[float, float],
-    regions: tuple[tuple[int, int, int, int], tuple[int, int, int, int]],
-    steps: tuple[int, int],
-    starts: tuple[tuple[float, float, int, float, float, float], ...],
-    shift: tuple[float, float],
-    span: tuple[float, float],
+    ca: np.ndarray, cb: np.ndarray, sign: float, span: tuple[float, float]
 ) -> tuple[float, float, float, float]:
     """``(F0(θ) * 6, F2(θ), F0(θ + π) * 6, F2(θ + π))`` of one chain of A and one of B.
 
-    ``regions = (ra, rb)``, ``ra = (lo_g, hi_g, lowest, highest)`` of region A (vertices
-    ``lo_g:hi_g``, its lowest and highest vertex in this direction); ``steps = (step_a,
-    step_b)``, +1 for a right chain, -1 for a left one (also the sign of its edges);
-    ``starts`` each chain's :func:`_first_edge` at ``t``; B shifted into A's frame by
-    ``shift = (dv, ds)``; ``span = (t, t_end)`` the lines that meet both regions.
+    ``ca``, ``cb``: the chains' breakpoints and slopes (:func:`_chain`, B in A's frame);
+    ``sign``: the product of the chains' signs (+1 for a right chain, -1 for a left one);
+    ``span = (t, t_end)`` the lines that meet both regions. The merge advances each chain by
+    a comparison added to its index, not by a branch: which chain breaks next is as good as
+    random, and a mispredicted branch per interval cost more than the interval's arithmetic.
     """
-    ra, rb = regions
-    step_a, step_b = steps
     t, t_end = span
-    sign = float(step_a * step_b)
-    # Each chain's current edge: from (v, s) to vertex n at (vn, sn), slope k = ds/dv.
-    va, sa, na, vna, sna, ka = starts[0]
-    vb, sb, nb, vnb, snb, kb = starts[1]
-    d = (sa + ka * (t - va)) - (sb + kb * (t - vb))
+    i = 0
+    j = 0
+    d = (ca[1, 0] + ca[2, 0] * (t - ca[0, 0])) - (cb[1, 0] + cb[2, 0] * (t - cb[0, 0]))
     psi = 0.0  # Ψ(|d|) when known
     known = False
     f0p = 0.0
@@ -247,9 +239,11 @@ def chain_pair(
     f0n = 0.0
     f2n = 0.0
     while True:
+        vna = ca[0, i + 1]
+        vnb = cb[0, j + 1]
         tn = min(vna, vnb, t_end)
-        xa = sna if tn == vna else sa + ka * (tn - va)
-        xb = snb if tn == vnb else sb + kb * (tn - vb)
+        xa = ca[1, i + 1] if tn == vna else ca[1, i] + ca[2, i] * (tn - ca[0, i])
+        xb = cb[1, j + 1] if tn == vnb else cb[1, j] + cb[2, j] * (tn - cb[0, j])
         dn = xa - xb
         x0, x2, y0, y2, psi, known = _interval(d, dn, sign * (t - tn), (psi, known and tn > t))
         f0p += x0
@@ -258,10 +252,8 @@ def chain_pair(
         f2n += y2
         if tn >= t_end:
             break
-        if vna <= tn:
-            va, sa, na, vna, sna, ka = _edge(pts, cs, ra, step_a, (0.0, 0.0), (na, vna, sna))
-        if vnb <= tn:
-            vb, sb, nb, vnb, snb, kb = _edge(pts, cs, rb, step_b, shift, (nb, vnb, snb))
+        i += vna <= tn
+        j += vnb <= tn
         t = tn
         d = dn
     return f0p, f2p, f0n, f2n
@@ -274,9 +266,11 @@ def walk_convex(
     ra: tuple[int, int, int, int],
     rb: tuple[int, int, int, int],
     shift: tuple[float, float],
+    scratch: np.ndarray,
 ) -> tuple[float, float, float, float]:
     """F0 and F2 of two convex regions in one direction: the four chain pairs.
 
+    ``scratch``: at least ``(4, 3, n + 1)`` floats, ``n`` the larger region's vertex count.
     Returns ``(F0(θ), F2(θ), F0(θ + π), F2(θ + π))``, as ``_sweep._walk_f0_f2``.
     """
     t_end = min(_vs(pts, ra[3], cs)[0], _vs(pts, rb[3], cs)[0] + shift[0])
@@ -284,19 +278,71 @@ def walk_convex(
     if not t_end > t:
         return 0.0, 0.0, 0.0, 0.0
     none = (0.0, 0.0)
-    # The four chains' edges at t: the same for both merges a chain takes part in.
-    a_right = _first_edge(pts, cs, ra, 1, none, t)
-    a_left = _first_edge(pts, cs, ra, -1, none, t)
-    b_right = _first_edge(pts, cs, rb, 1, shift, t)
-    b_left = _first_edge(pts, cs, rb, -1, shift, t)
-    rs = (ra, rb)
     span = (t, t_end)
-    x = chain_pair(pts, cs, rs, (1, 1), (a_right, b_right), shift, span)
-    y = chain_pair(pts, cs, rs, (1, -1), (a_right, b_left), shift, span)
-    z = chain_pair(pts, cs, rs, (-1, 1), (a_left, b_right), shift, span)
-    w = chain_pair(pts, cs, rs, (-1, -1), (a_left, b_left), shift, span)
-    t0 = ((x[0] + y[0]) + z[0]) + w[0]
-    t2 = ((x[1] + y[1]) + z[1]) + w[1]
-    p0 = ((x[2] + y[2]) + z[2]) + w[2]
-    p2 = ((x[3] + y[3]) + z[3]) + w[3]
+    # The four chains from their edges at t (A right, A left, B right, B left), each used in
+    # two merges; loops over them so that the inlined bodies are compiled once.
+    regions = (ra, ra, rb, rb)
+    steps = (1, -1, 1, -1)
+    shifts = (none, none, shift, shift)
+    for k in range(4):
+        _chain(pts, cs, regions[k], steps[k], shifts[k], span, scratch[k])
+    merges = ((0, 2), (0, 3), (1, 2), (1, 3))
+    t0 = 0.0
+    t2 = 0.0
+    p0 = 0.0
+    p2 = 0.0
+    for k in range(4):
+        i, j = merges[k]
+        x = chain_pair(scratch[i], scratch[j], float(steps[i] * steps[j]), span)
+        t0 += x[0]
+        t2 += x[1]
+        p0 += x[2]
+        p2 += x[3]
     return t0 / 6.0, t2, p0 / 6.0, p2
+
+
+@jit
+def convex_pair(
+    regions: tuple[np.ndarray, np.ndarray, np.ndarray], table: np.ndarray
+) -> np.ndarray:
+    """F0 and F2 of two convex regions, shape ``(2, directions)``: what
+    :func:`~scenespeak.spatial.forces._sweep.sweep` gives for this one pair (the same
+    operations, so the same floats), without its edge tables and general pair loop.
+
+    ``regions = (pts, region_start, origin)`` as for ``sweep`` with two regions, both convex and
+    counter-clockwise; ``table[d] = (cos θ, sin θ)`` with ``θ = 2π d / directions``, one row
+    per direction (:func:`~scenespeak.spatial.forces.kernel.direction_table`).
+    """
+    pts, region_start, origin = regions
+    directions = table.shape[0]
+    both = directions % 2 == 0
+    half = directions // 2 if both else directions
+    out = np.zeros((2, directions))
+    chained = np.ones(2, dtype=np.bool_)
+    low_high = np.zeros((2, 2), dtype=np.int64)
+    extent = np.empty((2, 2))
+    size = max(region_start[1] - region_start[0], region_start[2] - region_start[1])
+    scratch = np.empty((4, 3, size + 1))
+    ox = origin[1, 0] - origin[0, 0]
+    oy = origin[1, 1] - origin[0, 1]
+    for d in range(half):
+        c = table[d, 0]
+        s = table[d, 1]
+        track_extremes((c, s), pts, region_start, chained, (low_high, extent), d == 0)
+        dvb = oy * c - ox * s
+        if extent[0, 1] < extent[1, 0] + dvb or extent[1, 1] + dvb < extent[0, 0]:
+            continue  # no line of this direction meets both objects
+        t0, t2, q0, q2 = walk_convex(
+            pts,
+            (c, s),
+            (region_start[0], region_start[1], low_high[0, 0], low_high[0, 1]),
+            (region_start[1], region_start[2], low_high[1, 0], low_high[1, 1]),
+            (dvb, ox * c + oy * s),
+            scratch,
+        )
+        out[0, d] += t0
+        out[1, d] += t2
+        if both:
+            out[0, d + half] += q0
+            out[1, d + half] += q2
+    return out

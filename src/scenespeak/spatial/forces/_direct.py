@@ -24,6 +24,7 @@ import math
 
 import numpy as np
 
+from scenespeak.spatial.forces._convex import convex_pair
 from scenespeak.spatial.forces._jit import jit
 from scenespeak.spatial.forces._shapes import first_contact
 from scenespeak.spatial.forces._sweep import sweep
@@ -181,16 +182,69 @@ def _checked(h: np.ndarray) -> bool:
 
 
 @jit
+def _packed(pa: np.ndarray, pb: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(pts, region_start, origin)`` of the two polygons, as ``kernel._packed`` makes them:
+    each polygon's vertices relative to its first vertex, end to end."""
+    na = pa.shape[0]
+    nb = pb.shape[0]
+    pts = np.empty((na + nb, 2))
+    for i in range(na):
+        pts[i, 0] = pa[i, 0] - pa[0, 0]
+        pts[i, 1] = pa[i, 1] - pa[0, 1]
+    for i in range(nb):
+        pts[na + i, 0] = pb[i, 0] - pb[0, 0]
+        pts[na + i, 1] = pb[i, 1] - pb[0, 1]
+    region_start = np.array([0, na, na + nb], dtype=np.int64)
+    origin = np.empty((2, 2))
+    origin[0] = pa[0]
+    origin[1] = pb[0]
+    return pts, region_start, origin
+
+
+@jit
+def _swept(
+    pa: np.ndarray,
+    pb: np.ndarray,
+    convex: tuple[bool, bool],
+    kernels: tuple[np.ndarray, np.ndarray],
+    table: np.ndarray,
+) -> np.ndarray:
+    """``sweep`` of the pair (oriented polygons): F0 + F2 of two convex polygons straight by
+    the chain walk (:func:`~scenespeak.spatial.forces._convex.convex_pair`, the same floats),
+    anything else by the general sweep."""
+    codes, rs = kernels
+    pts, region_start, origin = _packed(pa, pb)
+    if convex[0] and convex[1] and codes.size == 2 and codes[0] == 0 and codes[1] == 1:
+        return convex_pair((pts, region_start, origin), table)
+    na = pa.shape[0]
+    nxt = np.empty(pts.shape[0], dtype=np.int64)
+    for i in range(pts.shape[0]):
+        nxt[i] = i + 1
+    nxt[na - 1] = 0
+    nxt[pts.shape[0] - 1] = na
+    pair = np.zeros(1, dtype=np.int64)
+    return sweep(
+        (pts, nxt, region_start, origin, np.array([convex[0], convex[1]])),
+        pair,
+        pair + 1,
+        np.zeros(1),
+        (codes, rs),
+        table.shape[0],
+    )[0]
+
+
+@jit
 def pair_histograms(
-    a: np.ndarray, b: np.ndarray, kernels: tuple[np.ndarray, np.ndarray], directions: int
+    a: np.ndarray, b: np.ndarray, kernels: tuple[np.ndarray, np.ndarray], table: np.ndarray
 ) -> tuple[int, np.ndarray]:
     """``(0, histograms)`` of polygons ``a`` (argument) and ``b`` (referent), shape
     ``(kernels, directions)``, or ``(1, empty)`` when the Python path must run.
 
-    ``kernels = (codes, rs)`` as for :func:`~scenespeak.spatial.forces._sweep.sweep`.
+    ``kernels = (codes, rs)`` as for :func:`~scenespeak.spatial.forces._sweep.sweep`;
+    ``table`` the directions' cosines and sines
+    (:func:`~scenespeak.spatial.forces.kernel.direction_table`).
     """
     nothing = np.empty((0, 0))
-    codes, rs = kernels
     if not (_plain(a) and _plain(b) and _ordinary_size(a, b)):
         return 1, nothing
     pa, shape_a = _oriented(a)
@@ -199,34 +253,9 @@ def pair_histograms(
     pb, shape_b = _oriented(b)
     if shape_b < 0:
         return 1, nothing
-    if rs.max() >= 1.0 and not _boxes_apart(pa, pb):
+    if kernels[1].max() >= 1.0 and not _boxes_apart(pa, pb):
         return 1, nothing  # overlap and contact: the exact test of the Python path
-    na = pa.shape[0]
-    nb = pb.shape[0]
-    pts = np.empty((na + nb, 2))
-    nxt = np.empty(na + nb, dtype=np.int64)
-    for i in range(na):
-        pts[i, 0] = pa[i, 0] - pa[0, 0]
-        pts[i, 1] = pa[i, 1] - pa[0, 1]
-        nxt[i] = i + 1 if i + 1 < na else 0
-    for i in range(nb):
-        pts[na + i, 0] = pb[i, 0] - pb[0, 0]
-        pts[na + i, 1] = pb[i, 1] - pb[0, 1]
-        nxt[na + i] = na + i + 1 if i + 1 < nb else na
-    region_start = np.array([0, na, na + nb], dtype=np.int64)
-    origin = np.empty((2, 2))
-    origin[0] = pa[0]
-    origin[1] = pb[0]
-    convex = np.array([shape_a == 0, shape_b == 0])
-    pair = np.zeros(1, dtype=np.int64)
-    out = sweep(
-        (pts, nxt, region_start, origin, convex),
-        pair,
-        pair + 1,
-        np.zeros(1),
-        (codes, rs),
-        directions,
-    )[0]
+    out = _swept(pa, pb, (shape_a == 0, shape_b == 0), kernels, table)
     if not _checked(out):
         return 1, nothing
     return 0, out

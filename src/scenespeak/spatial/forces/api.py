@@ -19,7 +19,7 @@ from numpy.typing import ArrayLike, NDArray
 from scenespeak.errors import InputError
 from scenespeak.spatial.forces import _jit, guards
 from scenespeak.spatial.forces.contact import _contact
-from scenespeak.spatial.forces.kernel import KernelSpec, sweep_pairs
+from scenespeak.spatial.forces.kernel import KernelSpec, direction_table, kernel_code, sweep_pairs
 from scenespeak.spatial.forces.regions import DEFAULT_MASK_TOLERANCE as _MASK_TOLERANCE
 from scenespeak.spatial.forces.regions import Region, _region
 
@@ -159,11 +159,13 @@ def _direct(
         return None
     from scenespeak.spatial.forces._direct import pair_histograms
 
-    kernels = [KernelSpec(x) for x in exponents]
-    codes = np.array([k.code for k in kernels], dtype=np.int64)
+    codes = np.array([kernel_code(x) for x in exponents], dtype=np.int64)
     rs = np.array(exponents, dtype=np.float64)
     status, out = pair_histograms(
-        np.ascontiguousarray(argument), np.ascontiguousarray(referent), (codes, rs), directions
+        np.ascontiguousarray(argument),
+        np.ascontiguousarray(referent),
+        (codes, rs),
+        direction_table(directions),
     )
     return out if status == 0 else None
 
