@@ -1,4 +1,4 @@
-"""Benchmark of ``scenespeak points``' stereo stage against SIFT alone.
+"""Benchmark of ``scenespeak points``' computation against SIFT alone.
 
 For a real pair (MiddEval2 "Art", or ``--pair LEFT RIGHT``, e.g. a generated scene's
 ``left.png right.png``) resized to 640×480, 1280×960 and 1920×1080, read in colour as the
@@ -6,13 +6,19 @@ command reads them, prints median wall-clock and process-CPU times, interleaved 
 
 * SIFT of both images, one after the other (the floor the target is set against: ``points``
   must take at most this + 25 %), and the two in two threads (as the command runs them);
-* the command's stage (``cli.points._stereo_points``: the pipeline's stereo stage, threaded
-  SIFT, the dense check cropped to the matches + 16 px, ``StereoOptions``);
-* the stage the command ran before issue 16 part C (threaded SIFT, the dense check over the
-  whole image), to show what the crop saves and how many points it changes;
+* what the command computes now (``cli.points._stereo_points``: the pair checks, among them
+  ``check_pair_order`` on the stage's own features, and the pipeline's stereo stage:
+  threaded SIFT, the dense check cropped to the matches + 16 px, ``StereoOptions``);
+* the stage as the command ran it at 55e6388 (main before issue 16 session 6: what this
+  benchmark timed as "points now" then; it left out the command's ``check_pair_order``;
+  its calls, on today's library);
+* the whole computation of the command at 55e6388: ``check_pair_order`` with its own two
+  SIFT extractions, then that stage;
 
 and checks that the command gives describe's points (``stereo_points(...,
-**StereoOptions().keywords())``). Images are decoded before timing.
+**StereoOptions().keywords())``), the points of the stage at 55e6388, and the points saved
+from 55e6388 in ``benchmarks/points_golden.json`` (``points_golden.py``; Art only). Images
+are decoded before timing.
 
 Run::
 
@@ -22,6 +28,7 @@ Run::
 from __future__ import annotations
 
 import argparse
+import hashlib
 import json
 import os
 import statistics
@@ -34,11 +41,13 @@ from typing import Any
 import cv2
 
 from scenespeak.cli.points import _stereo_points
-from scenespeak.perception import calibration, stereo
+from scenespeak.perception import calibration, plausibility, stereo
+from scenespeak.perception.blas import single_threaded_blas
 from scenespeak.perception.features import detect, load_image, to_gray
 from scenespeak.perception.stage_options import StereoOptions
 
 ART = Path(__file__).resolve().parents[1] / "../shared/data/real/stereo/middeval2/Art"
+GOLDEN = Path(__file__).resolve().parent / "points_golden.json"
 
 
 def timed(fn: Callable[[], object]) -> tuple[float, float]:
@@ -61,13 +70,41 @@ def _threaded_sift(left: Any, right: Any) -> tuple[Any, Any]:
         return fl, future.result()
 
 
-def _whole(left: Any, right: Any, rig: Any) -> Any:
-    """The command before issue 16 part C: threaded SIFT, the dense check over the whole
-    image."""
-    fl, fr = _threaded_sift(left, right)
-    return stereo.stereo_points(
-        left, right, rig, features_left=fl, features_right=fr, dense_crop=False, min_points=1
-    ).points
+def _stage_before(left: Any, right: Any, rig: Any) -> Any:
+    """The calls of ``cli.points._stereo_points`` at 55e6388: threaded SIFT of the colour
+    images, the pipeline's stage on them (each converted to gray again), BLAS
+    single-threaded. (The library under it is today's: the dense map's conversion to pixels,
+    made cheaper in the same change, is in both columns.)"""
+    with single_threaded_blas():
+        fl, fr = _threaded_sift(left, right)
+        return stereo.stereo_points(
+            left,
+            right,
+            rig,
+            features_left=fl,
+            features_right=fr,
+            min_points=1,
+            **StereoOptions(ratio=0.6).keywords(),
+        ).points
+
+
+def _command_before(left: Any, right: Any, rig: Any) -> Any:
+    """The command's computation at 55e6388: ``check_pair_order`` (its own SIFT of both
+    images), then the stage."""
+    plausibility.check_pair_order(left, right, rig, names=("left", "right"))
+    return _stage_before(left, right, rig)
+
+
+def _golden(size: tuple[int, int], points: Any, pair: bool) -> str:
+    """Whether the points are those saved from 55e6388 (Art only)."""
+    if pair or not GOLDEN.exists():
+        return "n/a"
+    want = json.loads(GOLDEN.read_text()).get(f"{size[0]}x{size[1]}", {}).get("middeval2/Art")
+    if want is None:
+        return "n/a"
+    doc = stereo.points_to_json(points)
+    got = hashlib.sha256(json.dumps(doc, sort_keys=True).encode()).hexdigest()
+    return "yes" if got == want["sha256"] else f"NO ({len(doc['points'])} vs {want['n']})"
 
 
 def _same(a: Any, b: Any) -> str:
@@ -96,10 +133,11 @@ def main() -> None:
     print(f"load average before: {' '.join(f'{x:.2f}' for x in os.getloadavg())}")
     print(f"pair: {left_path} / {right_path}, resized; wall (CPU) medians, s\n")
     print(
-        "| size | SIFT both | SIFT, 2 threads | points now | now / SIFT | before (whole image) "
-        "| before / SIFT | now = describe's stage | now vs before |"
+        "| size | SIFT both | SIFT, 2 threads | points now | now / SIFT | stage at 55e6388 "
+        "| stage 55e6388 / SIFT | command at 55e6388 | command 55e6388 / SIFT "
+        "| now = describe's stage | now = stage at 55e6388 | now = saved (55e6388) |"
     )
-    print("| --- | ---: | ---: | ---: | ---: | ---: | ---: | --- | --- |")
+    print("| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | --- | --- | --- |")
     names = (Path("left"), Path("right"))
     for size in args.sizes:
         interp = cv2.INTER_AREA if size[0] < left0.shape[1] else cv2.INTER_LINEAR
@@ -118,10 +156,13 @@ def main() -> None:
         def sift2(left: Any = left, right: Any = right) -> object:
             return _threaded_sift(left, right)
 
-        def before(left: Any = left, right: Any = right, rig: Any = rig) -> Any:
-            return _whole(left, right, rig)
+        def stage(left: Any = left, right: Any = right, rig: Any = rig) -> Any:
+            return _stage_before(left, right, rig)
 
-        cases = {"sift": sift, "sift2": sift2, "now": now, "before": before}
+        def command(left: Any = left, right: Any = right, rig: Any = rig) -> Any:
+            return _command_before(left, right, rig)
+
+        cases = {"sift": sift, "sift2": sift2, "now": now, "stage": stage, "command": command}
         times: dict[str, list[tuple[float, float]]] = {k: [] for k in cases}
         for _ in range(args.repeat):  # interleaved: they share the machine's load
             for k, fn in cases.items():
@@ -130,14 +171,17 @@ def main() -> None:
             k: (statistics.median(w for w, _ in t), statistics.median(c for _, c in t))
             for k, t in times.items()
         }
-        got, old = now(), before()
+        got, old = now(), stage()
         describe = stereo.stereo_points(left, right, rig, **StereoOptions().keywords()).points
         cell = {k: f"{w:.3f} ({c_:.3f})" for k, (w, c_) in med.items()}
 
         print(
             f"| {size[0]}×{size[1]} | {cell['sift']} | {cell['sift2']} | {cell['now']} | "
-            f"{_ratio(med, 'now')} | {cell['before']} | {_ratio(med, 'before')} | "
-            f"{_same(got, describe)} ({len(got.xyz)} points) | {_same(got, old)} |"
+            f"{_ratio(med, 'now')} | {cell['stage']} | {_ratio(med, 'stage')} | "
+            f"{cell['command']} | {_ratio(med, 'command')} | "
+            f"{_same(got, describe)} ({len(got.xyz)} points) | {_same(got, old)} | "
+            f"{_golden(size, got, args.pair is not None)} |",
+            flush=True,
         )
     print(f"\nload average after: {' '.join(f'{x:.2f}' for x in os.getloadavg())}")
 

@@ -1,5 +1,8 @@
 """plausibility.check_pair_order names what is wrong with a pair: an image that is not the other
-half (noise, the left image twice) or a calibration that does not fit (wild R)."""
+half (noise, the left image twice), swapped images, or a calibration that does not fit (wild R).
+
+Every case runs twice: with the check's own SIFT, and with the stereo stage's features given
+(``features=``, as ``scenespeak points`` calls it)."""
 
 from __future__ import annotations
 
@@ -8,13 +11,37 @@ import pytest
 
 from scenespeak.errors import CalibrationError, ImageError
 from scenespeak.perception.calibration import StereoRig, rig_from_short
-from scenespeak.perception.plausibility import check_pair_order
+from scenespeak.perception.features import detect, to_gray
+from scenespeak.perception.plausibility import CHECK_FEATURES, _strongest
+from scenespeak.perception.plausibility import check_pair_order as _check_pair_order
 from scenespeak.tools.fuzz.corpus import BASELINE, HFOV, H, W, card_pair
 
 
 @pytest.fixture(scope="module")
 def pair() -> tuple[np.ndarray, np.ndarray]:  # type: ignore[type-arg]
     return card_pair()
+
+
+@pytest.fixture(params=["own SIFT", "stage's features"], autouse=True)
+def given(request: pytest.FixtureRequest) -> bool:
+    return bool(request.param == "stage's features")
+
+
+_GIVEN: list[bool] = []
+
+
+@pytest.fixture(autouse=True)
+def _mode(given: bool) -> object:
+    _GIVEN.append(given)
+    yield
+    _GIVEN.pop()
+
+
+def check_pair_order(left: np.ndarray, right: np.ndarray, rig: StereoRig, **kw: object) -> float:  # type: ignore[type-arg]
+    """The check as called in this case's mode (features detected as the stereo stage does)."""
+    if _GIVEN[-1]:
+        kw["features"] = tuple(detect(to_gray(x), precise_upscale=False) for x in (left, right))
+    return _check_pair_order(left, right, rig, **kw)  # type: ignore[arg-type]
 
 
 def _rig(**changes: object) -> StereoRig:
@@ -53,3 +80,19 @@ def test_images_of_another_size_are_left_to_the_stereo_stage(
     pair: tuple[np.ndarray, np.ndarray],  # type: ignore[type-arg]
 ) -> None:
     assert check_pair_order(pair[0][:100], pair[1], _rig()) == 0.0
+
+
+def test_swapped_images_are_named(pair: tuple[np.ndarray, np.ndarray]) -> None:  # type: ignore[type-arg]
+    with pytest.raises(CalibrationError, match=r"calib\.json: .*negative disparity.*look swapped"):
+        check_pair_order(pair[1], pair[0], _rig(), names=("r.png", "l.png"))
+
+
+def test_the_strongest_features_are_kept_with_ties() -> None:
+    f = detect(to_gray(np.random.default_rng(2).integers(0, 255, (240, 320), dtype=np.uint8)))
+    assert 100 < len(f) < CHECK_FEATURES
+    n = len(f) // 2
+    kept = _strongest(f, n)
+    cut = np.sort(f.response)[::-1][n - 1]
+    assert len(kept) == int((f.response >= cut).sum()) >= n
+    assert np.array_equal(kept.xy, f.xy[f.response >= cut])  # their order
+    assert _strongest(f, len(f)) is f

@@ -73,7 +73,8 @@ def points_cmd(o: PointsCommand) -> None:
     left_img = load_image(left, gray=False)
     right_img = load_image(right, gray=False)
     with _status("matching the stereo pair", o.quiet):
-        plausibility.check_pair_order(left_img, right_img, rig, names=(str(left), str(right)))
+        # the pair-order check (swapped or unrelated images, a calibration that does not fit)
+        # runs inside, on the stage's own SIFT features
         points = _stereo_points(
             stereo, left_img, right_img, rig, ratio=o.ratio, sources=(left, right)
         )
@@ -98,34 +99,46 @@ def points_cmd(o: PointsCommand) -> None:
 def _stereo_points(
     stereo: Any, left: Any, right: Any, rig: Any, *, ratio: float, sources: tuple[Path, Path]
 ) -> Any:
-    """The pipeline's stereo stage, as ``describe`` runs it: SIFT of both images at once, then
-    ``stereo_points`` with the pipeline's :class:`~scenespeak.perception.stage_options.
-    StereoOptions` (the dense check cropped to the matches plus ``DENSE_MARGIN`` = 16 px).
+    """What ``scenespeak points`` computes: the pair checks and the pipeline's stereo stage,
+    as ``describe`` runs it (SIFT of both images at once, then ``stereo_points`` with the
+    pipeline's :class:`~scenespeak.perception.stage_options.StereoOptions`: the dense check
+    cropped to the matches plus ``DENSE_MARGIN`` = 16 px).
 
     One path for both commands (issue 10): the points are ``describe_scene(...).points`` bit
     for bit (``tests/cli/test_points_fast.py``). OpenCV releases the GIL in SIFT, so the right
     image's extraction runs in a second thread while this one does the left's; BLAS runs
-    single-threaded as in the pipeline. Before issue 16 the command checked the matches
-    against a dense map of the whole image; SGBM's path costs carry influence along whole
-    rows, so the crop gives a few different points on some pairs (``docs/cli.md`` gives the
-    count on every real pair at three sizes, and the accuracy against the ground truth).
+    single-threaded as in the pipeline. Each image is converted to gray once, and
+    :func:`~scenespeak.perception.plausibility.check_pair_order` (swapped or unrelated images,
+    a calibration that does not fit) matches the stage's features instead of running SIFT on
+    both images a second time (issue 16, session 6: that was about half of the command's
+    time). The points are those of the command before (``benchmarks/points_golden.py``).
     """
     from concurrent.futures import ThreadPoolExecutor
 
+    from scenespeak.perception import plausibility
     from scenespeak.perception.blas import single_threaded_blas
+    from scenespeak.perception.calibration import rectify
     from scenespeak.perception.features import detect, to_gray
     from scenespeak.perception.stage_options import StereoOptions
 
     names = (str(sources[0]), str(sources[1]))
     stereo.check_pair(left, right, rig, left_name=names[0], right_name=names[1])
+    rect = rectify(rig)
     with single_threaded_blas(), ThreadPoolExecutor(max_workers=1) as pool:
-        future = pool.submit(detect, to_gray(right), precise_upscale=False)
-        features_left = detect(to_gray(left), precise_upscale=False)
+        gray_right = to_gray(right)
+        future = pool.submit(detect, gray_right, precise_upscale=False)
+        gray_left = to_gray(left)
+        features_left = detect(gray_left, precise_upscale=False)
         features_right = future.result()
+        plausibility.check_pair_order(
+            gray_left, gray_right, rig, names=names, rect=rect,
+            features=(features_left, features_right),
+        )  # fmt: skip
         result = stereo.stereo_points(
-            left,
-            right,
+            gray_left,
+            gray_right,
             rig,
+            rect=rect,
             features_left=features_left,
             features_right=features_right,
             left_name=names[0],

@@ -32,7 +32,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
-from typing import Literal
+from typing import TYPE_CHECKING, Literal
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -41,7 +41,11 @@ from scenespeak import limits as _limits
 from scenespeak.errors import CalibrationError, ImageError, InputError
 from scenespeak.perception.calibration import Rectification, StereoRig, rectify
 
+if TYPE_CHECKING:  # features imports OpenCV; the checks of a rig alone do not need it
+    from scenespeak.perception.features import Features
+
 __all__ = [
+    "CHECK_FEATURES",
     "UNITS",
     "check_depths",
     "check_pair_order",
@@ -54,6 +58,8 @@ __all__ = [
 Units = Literal["m", "cm", "mm"]
 #: Length units a calibration's translations may be written in, and their size in metres.
 UNITS: dict[str, float] = {"m": 1.0, "cm": 0.01, "mm": 0.001}
+#: :func:`check_pair_order` matches the strongest this many SIFT features of each image.
+CHECK_FEATURES = 1500
 
 
 def with_units(rig: StereoRig, units: str) -> StereoRig:
@@ -176,16 +182,35 @@ class _PairMatches:
     right_rect: NDArray[np.float64]
 
 
+def _strongest(features: Features, n: int) -> Features:
+    """The features whose response is at least the ``n``-th largest (ties kept, as OpenCV's
+    ``nfeatures`` keeps them), in their order."""
+    if len(features) <= n:
+        return features
+    cut = np.partition(features.response, len(features) - n)[len(features) - n]
+    return features.subset(np.flatnonzero(features.response >= cut))
+
+
 def _sift_matches(
-    left: NDArray[np.generic], right: NDArray[np.generic], rect: Rectification
+    left: NDArray[np.generic],
+    right: NDArray[np.generic],
+    rect: Rectification,
+    features: tuple[Features, Features] | None = None,
 ) -> _PairMatches:
-    """Ratio-test SIFT matches anywhere in the other image (raw and rectified positions)."""
+    """Ratio-test SIFT matches anywhere in the other image (raw and rectified positions).
+
+    The :data:`CHECK_FEATURES` strongest features of each image: detected here, or taken
+    from ``features``.
+    """
     import cv2
 
     from scenespeak.perception.features import detect, to_gray
 
-    fl = detect(to_gray(left), max_features=1500)
-    fr = detect(to_gray(right), max_features=1500)
+    if features is None:
+        fl = detect(to_gray(left), max_features=CHECK_FEATURES)
+        fr = detect(to_gray(right), max_features=CHECK_FEATURES)
+    else:
+        fl, fr = (_strongest(f, CHECK_FEATURES) for f in features)
     none = np.zeros((0, 2))
     if len(fl) < 8 or len(fr) < 8:
         return _PairMatches((len(fl), len(fr)), none, none, none, none)
@@ -254,6 +279,7 @@ def check_pair_order(
     names: tuple[str, str] = ("LEFT", "RIGHT"),
     rect: Rectification | None = None,
     min_matches: int = 20,
+    features: tuple[Features, Features] | None = None,
 ) -> float:
     """Refuse a pair that is not one (see below) or whose matches mostly have negative
     disparity (images swapped).
@@ -263,6 +289,11 @@ def check_pair_order(
     first without the epipolar band, which tells apart an image that is not the other half of
     the pair (no feature matches anywhere; or the same view twice) from a calibration that does
     not fit the images (features match, but not along rectified rows).
+
+    The check looks at the :data:`CHECK_FEATURES` strongest SIFT features of each image. With
+    ``features`` (the images' features, already detected, e.g. by the stereo stage) it takes
+    the strongest of those instead of running SIFT twice more: ``scenespeak points`` does, and
+    saves about half of its time (issue 16).
 
     Returns
     -------
@@ -282,7 +313,7 @@ def check_pair_order(
     if np.shape(left)[:2] != size or np.shape(right)[:2] != size:
         return 0.0  # the stereo stage names the image whose size does not fit the calibration
     r = rect if rect is not None else rectify(rig)
-    matches = _sift_matches(left, right, r)
+    matches = _sift_matches(left, right, r, features)
     _check_same_scene(matches, names, rig.source)
     lxy, rxy = matches.left_rect, matches.right_rect
     band = np.abs(lxy[:, 1] - rxy[:, 1]) <= 1.5
