@@ -195,3 +195,30 @@ def test_points_on_every_real_pair(
     capsys: pytest.CaptureFixture[str],
 ) -> None:
     _check_real(real_data, name, size, tmp_path, capsys)
+
+
+@pytest.mark.parametrize(
+    ("case", "message"),
+    [
+        ("swapped", r"calib\.json: .*negative disparity.*look swapped"),
+        # without the check the stage finds a few points here, and the command would go on
+        ("left twice", r"shows the same view as"),
+        # the stage alone raises too ("only 0 stereo matches"): the check's refusal comes first
+        ("noise", r"the two images do not show the same scene"),
+    ],
+)
+def test_the_pair_checks_come_first(
+    case: str, message: str, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The pair-order check runs on the stage's features, beside the stage; a pair it refuses
+    is named as it names it, in one line, exit 2."""
+    import re
+
+    left, right = card_pair(CARDS)
+    if case == "noise":
+        right = np.random.default_rng(1).integers(0, 255, right.shape, dtype=np.uint8)
+    lp, rp, calib, _ = _write_pair(left, right, (W, H), tmp_path)
+    first, second = {"swapped": (rp, lp), "left twice": (lp, lp), "noise": (lp, rp)}[case]
+    assert main(["points", "--calib", str(calib), str(first), str(second)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and re.search(message, err), err

@@ -111,7 +111,9 @@ def _stereo_points(
     :func:`~scenespeak.perception.plausibility.check_pair_order` (swapped or unrelated images,
     a calibration that does not fit) matches the stage's features instead of running SIFT on
     both images a second time (issue 16, session 6: that was about half of the command's
-    time). The points are those of the command before (``benchmarks/points_golden.py``).
+    time), in the second thread while this one matches and runs SGBM; when it refuses the
+    pair, its error is the one raised, as when it ran first. The points are those of the
+    command before (``benchmarks/points_golden.py``).
     """
     from concurrent.futures import ThreadPoolExecutor
 
@@ -130,20 +132,27 @@ def _stereo_points(
         gray_left = to_gray(left)
         features_left = detect(gray_left, precise_upscale=False)
         features_right = future.result()
-        plausibility.check_pair_order(
-            gray_left, gray_right, rig, names=names, rect=rect,
+        # the pair-order check needs only the features: the worker thread runs it while this
+        # one matches and computes the dense map; its refusal comes first, as before
+        check = pool.submit(
+            plausibility.check_pair_order, gray_left, gray_right, rig, names=names, rect=rect,
             features=(features_left, features_right),
         )  # fmt: skip
-        result = stereo.stereo_points(
-            gray_left,
-            gray_right,
-            rig,
-            rect=rect,
-            features_left=features_left,
-            features_right=features_right,
-            left_name=names[0],
-            right_name=names[1],
-            min_points=1,
-            **StereoOptions(ratio=ratio).keywords(),
-        )
+        try:
+            result = stereo.stereo_points(
+                gray_left,
+                gray_right,
+                rig,
+                rect=rect,
+                features_left=features_left,
+                features_right=features_right,
+                left_name=names[0],
+                right_name=names[1],
+                min_points=1,
+                **StereoOptions(ratio=ratio).keywords(),
+            )
+        except Exception:
+            check.result()  # a pair the check refuses is named as the check names it
+            raise
+        check.result()
     return result.points
