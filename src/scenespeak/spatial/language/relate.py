@@ -353,14 +353,14 @@ def _build(
             ab + aa,
         )
     )
-    out: list[tuple[Relation, PairHistograms]] = []
-    add = out.append
-    for r in order:
-        rel, hist = rels[r], hists[r]
+    # In the rows' order (the objects lie in memory in that order: a pass in the output's
+    # order would jump between them, about twice as slow), then each pair to its place.
+    for rel in rels:
         rel.__class__ = Relation
+    for hist in hists:
         hist.__class__ = PairHistograms
-        add((rel, hist))
-    return out
+    both = list(zip(rels, hists, strict=True))
+    return [both[r] for r in order]
 
 
 def _direction_dicts(x: NDArray[np.float64]) -> list[dict[str, float]]:
