@@ -13,10 +13,12 @@ pass on easy scenes alone).
 
 from __future__ import annotations
 
+import collections
 import copy
 import dataclasses
 import gc
 import importlib
+import math
 import pickle
 from collections.abc import Iterator
 
@@ -286,6 +288,49 @@ def test_results_are_ordinary_relations() -> None:
     assert back.f0.tobytes() == hist.f0.tobytes() and back.area_b == hist.area_b
     assert [f.name for f in dataclasses.fields(hist)] == list(language.PairHistograms.__slots__)
     assert rel.to_dict()["sentence"] == rel.sentence
+
+
+def _generic_to_dict(rel: language.Relation) -> dict[str, object]:
+    """``Relation.to_dict`` as it was written before it went field by field: one loop over
+    the fields (the reference)."""
+    out: dict[str, object] = {}
+    for f in dataclasses.fields(rel):
+        value = getattr(rel, f.name)
+        if f.name in ("deviation0", "deviation2"):
+            out[f"{f.name}_deg"] = {k: math.degrees(v) for k, v in value.items()}
+        elif f.name == "deviation":
+            out["deviation_deg"] = math.degrees(value)
+        elif isinstance(value, dict):
+            out[f.name] = {k: float(v) for k, v in value.items()}
+        elif isinstance(value, float):
+            out[f.name] = float(value)
+        else:
+            out[f.name] = value
+    return out
+
+
+def test_to_dict_is_the_generic_loop() -> None:
+    """The same keys in the same order, the same values of the same types, and new dicts,
+    for the relations of a scene and for fields of other types (NumPy floats, ints, a dict
+    subclass)."""
+    sq = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
+    got = language.relate_objects([sq, sq + np.array([3.0, 0.2]), sq + 0.5], names=list("abc"))
+    odd = language.Relation(
+        "a", "b", "left", None, "mostly", "s", np.float64(0.5), coverage=1, hybrid=True,
+        degrees=collections.OrderedDict(left=np.float64(0.25), right=1),
+        deviation0={"left": 1.0}, deviation=np.float64(0.125), overlap=np.float64(0.5),
+    )  # fmt: skip
+    for rel in [rel for rel, _ in got] + [odd]:
+        want, have = _generic_to_dict(rel), rel.to_dict()
+        assert list(have) == list(want) and have == want
+        assert [type(v) for v in have.values()] == [type(v) for v in want.values()]
+        for key, value in have.items():
+            if isinstance(value, dict):
+                assert value is not getattr(rel, key, None)
+                assert [type(v) for v in value.values()] == [
+                    type(v)
+                    for v in want[key].values()  # type: ignore[attr-defined]
+                ]
 
 
 @pytest.mark.parametrize("enabled", [True, False])

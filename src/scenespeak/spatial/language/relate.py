@@ -389,10 +389,13 @@ def _sentences(
     ``template.format(argument=..., referent=...)`` gives (through :func:`_printf`)."""
     horizontal_templates, vertical_templates = templates
     patterns = {t: _printf(t) for t in set(horizontal_templates)}
-    horizontal = [
-        _fill(t, patterns[t], a, r)
-        for t, a, r in zip(horizontal_templates, arguments, referents, strict=True)
-    ]
+    rows = zip(horizontal_templates, arguments, referents, strict=True)
+    if all(p is not None and p[1] == 2 for p in patterns.values()):
+        # The usual case: every pattern names the argument, then the referent.
+        texts = {t: p[0] for t, p in patterns.items() if p is not None}
+        horizontal = [texts[t] % (a, r) for t, a, r in rows]
+    else:
+        horizontal = [_fill(t, patterns[t], a, r) for t, a, r in rows]
     if all(v is None for v in verticals):
         return horizontal, horizontal
     said = list(horizontal)

@@ -105,28 +105,54 @@ class Relation:
         >>> d["primary"], d["secondary"], d["sentence"]
         ('left', None, 'The mug is directly to the left of the can.')
         """
-        out: dict[str, Any] = {}
-        for f in _FIELDS:
-            value = getattr(self, f.name)
-            if f.name in ("deviation0", "deviation2"):
-                out[f"{f.name}_deg"] = {k: math.degrees(v) for k, v in value.items()}
-            elif f.name == "deviation":
-                out["deviation_deg"] = math.degrees(value)
-            elif isinstance(value, dict):
-                out[f.name] = {k: float(v) for k, v in value.items()}
-            elif isinstance(value, float):
-                out[f.name] = float(value)
-            else:
-                out[f.name] = value
-        return out
+        # Field by field, in the fields' order (one generic loop over ``fields`` cost about
+        # twice as much: ``relate_objects`` on 100 objects makes 9,900 of them).
+        deg = math.degrees
+        return {
+            "argument": _plain(self.argument),
+            "referent": _plain(self.referent),
+            "primary": _plain(self.primary),
+            "secondary": _plain(self.secondary),
+            "hedge": _plain(self.hedge),
+            "sentence": _plain(self.sentence),
+            "confidence": _plain(self.confidence),
+            "secondary_hedge": _plain(self.secondary_hedge),
+            "kind": _plain(self.kind),
+            "horizontal_sentence": _plain(self.horizontal_sentence),
+            "degrees0": _plain(self.degrees0),
+            "degrees2": _plain(self.degrees2),
+            "degrees": _plain(self.degrees),
+            "deviation0_deg": {k: deg(v) for k, v in self.deviation0.items()},
+            "deviation2_deg": {k: deg(v) for k, v in self.deviation2.items()},
+            "deviation_deg": deg(self.deviation),
+            "coverage": _plain(self.coverage),
+            "extends_share": _plain(self.extends_share),
+            "overlap": _plain(self.overlap),
+            "referent_overlap": _plain(self.referent_overlap),
+            "vertical": _plain(self.vertical),
+            "hybrid": _plain(self.hybrid),
+            "frame": _plain(self.frame),
+        }
 
     def __reduce__(self) -> tuple[Callable[..., Relation], tuple[Any, ...]]:
         """Pickle (and copy) as the field values, rebuilt by :func:`_relation`."""
         return _relation, tuple(getattr(self, name) for name in _NAMES)
 
 
-_FIELDS = fields(Relation)
-_NAMES = tuple(f.name for f in _FIELDS)
+_NAMES = tuple(f.name for f in fields(Relation))
+
+
+def _plain(value: Any) -> Any:
+    """A field's JSON-ready value: dicts of plain floats, plain floats, the rest as it is."""
+    if type(value) is str or value is None:
+        return value
+    if isinstance(value, dict):
+        if type(value) is dict and all(type(v) is float for v in value.values()):
+            return value.copy()  # float(v) is v for a float: the same new dict, faster
+        return {k: float(v) for k, v in value.items()}
+    if isinstance(value, float):
+        return float(value)
+    return value
 
 
 def _twin(cls: type[Any]) -> type[Any]:
