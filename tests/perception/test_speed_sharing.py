@@ -119,3 +119,24 @@ def test_finer_search_shared_with_a_thread_gives_the_same_labelling(photo_db: Pa
         assert np.array_equal(a.inliers, b.inliers)
         assert np.array_equal(a.homography, b.homography)
         assert np.array_equal(a.outline_in_scene, b.outline_in_scene)
+
+
+def test_faiss_on_one_thread_for_a_small_search_gives_the_same_answer() -> None:
+    faiss = pytest.importorskip("faiss")
+    from scenespeak.perception.recognition import build_index
+    from scenespeak.perception.recognition.ivf import FaissIndex
+
+    rng = np.random.default_rng(3)
+    base = rng.integers(0, 256, (6000, 128), dtype=np.uint8)
+    query = np.vstack([base[:200], rng.integers(0, 256, (100, 128), dtype=np.uint8)])
+    index = build_index(base, "faiss", nlist=64, nprobe=4)
+    assert isinstance(index, FaissIndex)
+    assert 300 * 4 * 6000 < index.serial_below * 64  # this search is a small one
+    before = faiss.omp_get_max_threads()
+    small = index.search(query, 16)  # one OpenMP thread
+    assert faiss.omp_get_max_threads() == before  # restored afterwards
+    index.threads = 2
+    both = index.search(query, 16)  # FAISS's two threads
+    np.testing.assert_array_equal(small[0], both[0])
+    np.testing.assert_array_equal(small[1], both[1])
+    assert (small[1][:200, 0] == np.arange(200)).all()

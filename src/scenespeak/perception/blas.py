@@ -1,13 +1,14 @@
-"""BLAS threads: limit them to one inside a block (the matrices here are small)."""
+"""BLAS and FAISS threads: limit them inside a block (the matrices here are small)."""
 
 from __future__ import annotations
 
 import contextlib
 import functools
 import sys
+from collections.abc import Iterator
 from typing import Any
 
-__all__ = ["single_threaded_blas"]
+__all__ = ["omp_threads", "single_threaded_blas"]
 
 
 def single_threaded_blas() -> contextlib.AbstractContextManager[object]:
@@ -31,3 +32,23 @@ def _blas_controller(_n_modules: int) -> Any:
     except ImportError:  # pragma: no cover - a declared dependency
         return None
     return ThreadpoolController()
+
+
+@contextlib.contextmanager
+def omp_threads(threads: int | None) -> Iterator[None]:
+    """FAISS's OpenMP threads for this thread's searches inside the block (None: as they are).
+
+    OpenMP keeps the thread count per calling thread, so the pipeline's two threads each set
+    their own and restore it afterwards.
+    """
+    if threads is None:
+        yield
+        return
+    import faiss  # optional dependency
+
+    before = faiss.omp_get_max_threads()
+    faiss.omp_set_num_threads(max(1, int(threads)))
+    try:
+        yield
+    finally:
+        faiss.omp_set_num_threads(before)

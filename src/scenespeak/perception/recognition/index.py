@@ -3,7 +3,9 @@
 
 from __future__ import annotations
 
+import itertools
 import math
+from collections.abc import Callable, Iterator
 from typing import Literal, Protocol
 
 import numpy as np
@@ -68,6 +70,36 @@ def _sqnorms(data: NDArray[np.uint8], chunk: int = 8192) -> NDArray[np.float32]:
         b = data[s : s + chunk].astype(np.float32)
         out[s : s + chunk] = np.einsum("ij,ij->i", b, b)
     return out
+
+
+def _nearest_centroid(
+    x: NDArray[np.float32],
+    c: NDArray[np.float32],
+    chunk: int = 2048,
+) -> NDArray[np.intp]:
+    cn = np.einsum("ij,ij->i", c, c)
+    out = np.empty(x.shape[0], np.intp)
+    for s in range(0, x.shape[0], chunk):
+        d = x[s : s + chunk] @ c.T
+        d *= -2.0
+        d += cn[None, :]
+        out[s : s + chunk] = np.argmin(d, axis=1)
+    return out
+
+
+def _batches(
+    chunks: Callable[[], Iterator[NDArray[np.uint8]]], rows: int = 16384
+) -> Iterator[NDArray[np.uint8]]:
+    """The chunks regrouped into blocks of about ``rows`` rows (for efficient GEMMs)."""
+    pending: list[NDArray[np.uint8]] = []
+    count = 0
+    for block in itertools.chain(chunks(), [None]):
+        if block is not None:
+            pending.append(block)
+            count += block.shape[0]
+        if count and (count >= rows or block is None):
+            yield np.concatenate(pending)
+            pending, count = [], 0
 
 
 class ExactIndex:
