@@ -10,12 +10,13 @@ from __future__ import annotations
 
 import sqlite3
 from collections.abc import Iterator
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from scenespeak.errors import DatabaseError
+from scenespeak.perception.recognition.colour import BINS, ColourModel
 from scenespeak.perception.recognition.index import (
     _DIM,
     DescriptorIndex,
@@ -29,7 +30,7 @@ from scenespeak.perception.recognition.schema import cached_quantiser, save_quan
 if TYPE_CHECKING:
     from scenespeak.perception.recognition.store import ObjectDatabase
 
-__all__ = ["descriptor_chunks", "index_of", "read_views"]
+__all__ = ["descriptor_chunks", "index_of", "read_colour_models", "read_views"]
 
 
 _SELECT_VIEWS = " FROM views v JOIN objects o ON o.id = v.object_id ORDER BY v.id"
@@ -124,3 +125,28 @@ def index_of(
         desc[s : s + block.shape[0]] = block
         s += block.shape[0]
     return build_index(desc, kind, nprobe=nprobe, seed=seed)
+
+
+def read_colour_models(db: ObjectDatabase) -> dict[str, ColourModel]:
+    """Each object's colour signatures and chromatic-box aspects, by label (see
+    :meth:`ObjectDatabase.colour_models`; none in a version-1 file opened read-only)."""
+    rows: list[tuple[Any, ...]] = []
+    tables = db._query("SELECT name FROM sqlite_master WHERE name = 'view_colours'")
+    if tables:  # none in a version-1 file opened read-only
+        rows = db._query(
+            "SELECT o.label, c.signature, c.aspect FROM view_colours c "
+            "JOIN views v ON v.id = c.view_id JOIN objects o ON o.id = v.object_id "
+            "ORDER BY v.id"
+        )
+    by_label: dict[str, tuple[list[NDArray[np.float32]], list[float]]] = {}
+    for label, blob, aspect in rows:
+        sig = np.frombuffer(blob, np.float32)
+        if sig.shape != (BINS,) or not np.all(np.isfinite(sig)):
+            continue  # a damaged signature only costs the colour cue
+        sigs, aspects = by_label.setdefault(str(label), ([], []))
+        sigs.append(sig)
+        aspects.append(float(aspect))
+    return {
+        label: ColourModel(np.array(sigs, np.float32), np.array(aspects, np.float32))
+        for label, (sigs, aspects) in by_label.items()
+    }

@@ -18,13 +18,17 @@ from scenespeak.cleantext import check_label
 from scenespeak.errors import DatabaseError, InputError
 from scenespeak.perception import dbfiles
 from scenespeak.perception.features import Features
-from scenespeak.perception.recognition.colour import BINS, ColourModel
+from scenespeak.perception.recognition.colour import ColourModel
 from scenespeak.perception.recognition.index import (
     DescriptorIndex,
     IndexKind,
 )
 from scenespeak.perception.recognition.label import LabelOptions, _Loaded, label_features
-from scenespeak.perception.recognition.loading import index_of, read_views
+from scenespeak.perception.recognition.loading import (
+    index_of,
+    read_colour_models,
+    read_views,
+)
 from scenespeak.perception.recognition.results import Labelling, ObjectInfo, TrainingView
 from scenespeak.perception.recognition.schema import (
     _SCHEMA,
@@ -478,30 +482,9 @@ class ObjectDatabase:
         {'astronaut': (1, 28)}
         """
         gen = self.generation()
-        if self._colours is not None and self._colours[0] == gen:
-            return dict(self._colours[1])
-        rows: list[tuple[Any, ...]] = []
-        tables = self._query("SELECT name FROM sqlite_master WHERE name = 'view_colours'")
-        if tables:  # none in a version-1 file opened read-only
-            rows = self._query(
-                "SELECT o.label, c.signature, c.aspect FROM view_colours c "
-                "JOIN views v ON v.id = c.view_id JOIN objects o ON o.id = v.object_id "
-                "ORDER BY v.id"
-            )
-        by_label: dict[str, tuple[list[NDArray[np.float32]], list[float]]] = {}
-        for label, blob, aspect in rows:
-            sig = np.frombuffer(blob, np.float32)
-            if sig.shape != (BINS,) or not np.all(np.isfinite(sig)):
-                continue  # a damaged signature only costs the colour cue
-            sigs, aspects = by_label.setdefault(str(label), ([], []))
-            sigs.append(sig)
-            aspects.append(float(aspect))
-        models = {
-            label: ColourModel(np.array(sigs, np.float32), np.array(aspects, np.float32))
-            for label, (sigs, aspects) in by_label.items()
-        }
-        self._colours = (gen, models)
-        return dict(models)
+        if self._colours is None or self._colours[0] != gen:
+            self._colours = (gen, read_colour_models(self))
+        return dict(self._colours[1])
 
     @property
     def index(self) -> DescriptorIndex:
@@ -532,9 +515,7 @@ class ObjectDatabase:
             the matches that explain no detection, ``LabelOptions.finer_*``) also finds
             small and far objects (:func:`~scenespeak.perception.recognition.finer.finer_search`).
         executor : Executor, optional
-            With ``image``: another thread to share the finer search's boxes with (each box
-            is looked at by whichever thread is free first; the result is the same without
-            it). The pipeline passes its stereo thread.
+            With ``image``: a thread to share the finer search's boxes with (same result).
         **overrides
             Single fields of :class:`LabelOptions` (``min_inliers=5``, ``small_area=0``, ...).
 
@@ -555,6 +536,24 @@ class ObjectDatabase:
         labelling = label_features(self._loaded, features, opts)
         if image is None:
             return labelling
+        return self.look_closer(features, labelling, image, opts, executor=executor)
+
+    def look_closer(
+        self,
+        features: Features,
+        labelling: Labelling,
+        image: NDArray[np.generic],
+        options: LabelOptions | None = None,
+        *,
+        executor: Executor | None = None,
+    ) -> Labelling:
+        """:meth:`label`'s finer search alone, on ``labelling = label(features, options)``:
+        ``label(features, options, image=image)`` in two steps, so that work needing only the
+        first labelling can start in between (the pipeline's). Returns ``labelling`` itself
+        (the same object) when the finer search adds nothing."""
+        opts = options if options is not None else LabelOptions()
+        self.load(nprobe=opts.nprobe)
+        assert self._loaded is not None
         from scenespeak.perception.recognition.finer import finer_search
 
         return finer_search(self._loaded, image, features, labelling, opts, executor)
