@@ -24,17 +24,15 @@ stage's result in a frozen :class:`SceneDescription`:
 
 Threads: the two SIFT extractions run at the same time; then the second thread runs the whole
 stereo stage (matching, SGBM around the matches, triangulation) and geometry first's support
-plane and segments while this one labels the left keypoints; the finer search's boxes go to
-whichever thread is free (``docs/architecture.md``; the result is the same with one thread).
+plane and segments while this one labels the left keypoints, and then the objects and the
+relations on that first labelling, kept when the finer search that follows (its boxes go to
+whichever thread is free) adds nothing (:class:`scenespeak.pipeline_threads.Guess`;
+``docs/architecture.md``; the result is the same with one thread).
 
-Speed (``benchmarks/bench_pipeline.py --only timing``, 640×480 rendered pair with 5 objects,
-shared 2-core machine, load 7–11, session 5): the whole call takes about 1.7–2.0× the two SIFT
-extractions run one after the other (CPU time about 2×); issue 10's target is 1.3×. In CPU
-time, one thread, bench scene 0: the two SIFTs ≈ 170–215 ms, stereo ≈ 25–40, the labelling
-≈ 13–19 plus the finer search ≈ 60–68 (its crops' SIFT and labelling), geometry first's plane
-and segments ≈ 21, the rest of the objects ≈ 27 and the relations ≈ 10 ms. BLAS is
-limited to one thread (the matrices are small; a second OpenBLAS thread made a 200 × 128 ×
-200 product 150× slower when the other core was busy).
+Speed (``benchmarks/bench_pipeline.py --only timing``, 640×480 pair, 5 objects): 1.62× the
+two SIFT extractions one after the other (idle 2-core machine, before the guess); the target
+is 1.3×. CPU, one thread, load 8: the SIFTs ≈ 195 ms, stereo ≈ 35, labelling ≈ 18, finer
+search ≈ 67, plane and segments ≈ 31, objects ≈ 38, relations ≈ 14 ms.
 
 :meth:`SceneDescription.to_dict` gives exactly the JSON of ``docs/interfaces.md`` (plus extra
 fields); :meth:`SceneDescription.to_text` the sentences for people.
@@ -43,10 +41,10 @@ fields); :meth:`SceneDescription.to_text` the sentences for people.
 from __future__ import annotations
 
 import time
-from collections.abc import Callable, Iterator, Mapping
+from collections.abc import Callable, Mapping
 from concurrent.futures import Executor, Future, ThreadPoolExecutor
-from contextlib import contextmanager
 from dataclasses import dataclass, field, replace
+from functools import partial
 from os import PathLike
 from pathlib import Path
 from typing import Any
@@ -62,11 +60,11 @@ from scenespeak.perception.objects import ObjectOptions, SceneObject
 from scenespeak.perception.recognition.colour import ColourModel, name_unknown_objects
 from scenespeak.perception.recognition.options import LabelOptions
 from scenespeak.perception.recognition.results import Labelling
-from scenespeak.perception.scene_objects import StrategyOptions, geometry_for, scene_objects
+from scenespeak.perception.scene_objects import StrategyOptions, scene_objects
 from scenespeak.perception.scene_objects import outline_mask as _outline_mask  # noqa: F401  (pipeline_rgbd)
-from scenespeak.perception.scene_regions import SceneGeometry
 from scenespeak.perception.stage_options import StereoOptions
-from scenespeak.perception.stereo import StereoResult
+from scenespeak.pipeline_threads import Guess, InlineExecutor, Say, StereoStage, stereo_stage
+from scenespeak.pipeline_threads import timed as _timed
 from scenespeak.spatial.options import RelationOptions
 
 __all__ = [
@@ -202,15 +200,6 @@ class PipelineOptions:
 # the chain
 
 
-@contextmanager
-def _timed(timings: dict[str, float], name: str) -> Iterator[None]:
-    t0 = time.perf_counter()
-    try:
-        yield
-    finally:
-        timings[name] = timings.get(name, 0.0) + time.perf_counter() - t0
-
-
 def _relate_all(objects: tuple[SceneObject, ...], directions: int) -> list[PairRelation]:
     """Every ordered pair through the force histograms and the rule base.
 
@@ -231,19 +220,6 @@ def _relate_all(objects: tuple[SceneObject, ...], directions: int) -> list[PairR
     order = {o.key: k for k, o in enumerate(objects)}
     relations.sort(key=lambda r: (order[r.argument], order[r.referent]))
     return relations
-
-
-class _InlineExecutor(Executor):
-    """``ThreadPoolExecutor``'s ``submit`` run at once in the calling thread (``threads=1``)."""
-
-    def submit(self, fn: Callable[..., Any], /, *args: Any, **kwargs: Any) -> Future[Any]:
-        """Run ``fn(*args, **kwargs)`` now; its result (or exception) in a finished future."""
-        future: Future[Any] = Future()
-        try:
-            future.set_result(fn(*args, **kwargs))
-        except BaseException as exc:  # handed to whoever asks for the result, as a pool does
-            future.set_exception(exc)
-        return future
 
 
 def describe_scene(
@@ -304,20 +280,21 @@ def describe_scene(
     # SIFT once per image, the two images at the same time (OpenCV releases the GIL). Once the
     # right image's features exist, the worker thread runs the whole stereo stage (matching,
     # SGBM, triangulation: none of it needs the labels) while this thread labels the left
-    # keypoints (the database stays here: SQLite connections belong to their thread). The
-    # rest works on small matrices (a few hundred keypoints and points): OpenBLAS's second
-    # thread only costs there, and a lot when the other core is busy (a 200 x 128 x 200
-    # product took 16 ms instead of 0.1 ms on the shared 2-core machine), so BLAS runs
-    # single-threaded throughout.
+    # keypoints (the database stays here: SQLite connections belong to their thread); then it
+    # runs the rest of the chain on that first labelling (pipeline_threads.Guess), kept when
+    # the finer search here adds nothing to it. The rest works on small matrices (a few
+    # hundred keypoints and points): OpenBLAS's second thread only costs there, and a lot when
+    # the other core is busy (a 200 x 128 x 200 product took 16 ms instead of 0.1 ms on the
+    # shared 2-core machine), so BLAS runs single-threaded throughout.
     say("sift")
-    pool_cm = ThreadPoolExecutor(max_workers=1) if opts.threads > 1 else _InlineExecutor()
+    pool_cm = ThreadPoolExecutor(max_workers=1) if opts.threads > 1 else InlineExecutor()
     with single_threaded_blas(), pool_cm as pool:
         t0 = time.perf_counter()
         future_r = pool.submit(detect, to_gray(right), precise_upscale=False)
         feats_l = detect(to_gray(left), precise_upscale=False)
         timings["sift"] = time.perf_counter() - t0
         future_st = pool.submit(
-            _stereo_stage,
+            stereo_stage,
             (left, right, rig),
             (opts.stereo, opts.strategy),
             feats_l,
@@ -325,39 +302,51 @@ def describe_scene(
             (lname, rname),
             timings,
         )
-        with _timed(timings, "label"):
-            # with the image, the finer search looks again where matches explain nothing; its
-            # boxes are shared with the stereo thread once that is done (same result)
-            labelling: Labelling = db.label(feats_l, opts.labels, image=left, executor=pool)
-        say("stereo")
-        with _timed(timings, "wait"):
-            stage: StereoStage = future_st.result()
         id_to_label = {o.id: o.label for o in db.list_objects()} if opts.strategy.geometry else {}
         colours = db.colour_models() if opts.labels.colour and hasattr(db, "colour_models") else {}
-        early = _EarlyStages((left, right), feats_l, stage, labelling, id_to_label, colours)
-        return _after_stereo(early, opts, src, timings, say)
+        early = partial(
+            _EarlyStages, (left, right), feats_l, id_to_label=id_to_label, colours=colours
+        )
+
+        def rest(labelling: Labelling, times: dict[str, float], tell: Say) -> SceneDescription:
+            stage = early(stereo=future_st.result(), labelling=labelling)
+            return _after_stereo(stage, opts, src, times, tell)
+
+        return _label_and_finish(db, (feats_l, left), opts, pool, rest, future_st, timings, say)
 
 
-@dataclass(frozen=True, eq=False)
-class StereoStage:
-    """What the stereo stage (the second thread) hands on to the rest of the chain.
-
-    Attributes
-    ----------
-    features_right : Features
-        SIFT features of the right image.
-    result : StereoResult
-        Matches, triangulated points, rectification and the dense map
-        (:func:`scenespeak.perception.stereo.stereo_points`).
-    geometry : SceneGeometry or None
-        Geometry first's support plane and segments
-        (:func:`scenespeak.perception.scene_objects.geometry_for`: they need no labels, so
-        this thread makes them while the other labels); None when the strategy uses none.
-    """
-
-    features_right: Features
-    result: StereoResult
-    geometry: SceneGeometry | None = None
+def _label_and_finish(
+    db: Any,
+    scene: tuple[Features, NDArray[np.generic]],
+    opts: PipelineOptions,
+    pool: Executor,
+    rest: Callable[[Labelling, dict[str, float], Say], SceneDescription],
+    stereo_done: Future[StereoStage],
+    timings: dict[str, float],
+    say: Say,
+) -> SceneDescription:
+    """Stage 2 and the rest: the first labelling, the guess at the rest of the chain (two
+    threads), the finer search; then the guess kept or the rest run here on what it found."""
+    feats_l, left = scene
+    with _timed(timings, "label"):
+        first: Labelling = db.label(feats_l, opts.labels)
+        guess = Guess.start(pool, partial(rest, first)) if opts.threads > 1 else None
+        try:
+            # the finer search looks again where matches explain nothing; its boxes are
+            # shared with the stereo thread once that is free (same result)
+            labelling = db.look_closer(feats_l, first, left, opts.labels, executor=pool)
+        except BaseException:
+            if guess is not None:
+                guess.abandon()
+            raise
+        if guess is not None and labelling is not first:
+            guess.abandon()  # the finer search found more: the rest runs here
+    say("stereo")
+    with _timed(timings, "wait"):
+        if guess is not None and labelling is first:
+            return guess.adopt(timings, say)
+        stereo_done.result()
+    return rest(labelling, timings, say)
 
 
 @dataclass(frozen=True, eq=False)
@@ -370,38 +359,6 @@ class _EarlyStages:
     labelling: Labelling
     id_to_label: Mapping[int, str]
     colours: Mapping[str, ColourModel] = field(default_factory=dict)
-
-
-def _stereo_stage(
-    pair: tuple[NDArray[np.generic], NDArray[np.generic], Any],
-    opts: tuple[StereoOptions, StrategyOptions],
-    feats_l: Features,
-    future_r: Future[Features],
-    names: tuple[str, str],
-    timings: dict[str, float],
-) -> StereoStage:
-    """The right image's features (from ``future_r``), then the stereo stage and the scene's
-    geometry (worker thread)."""
-    from scenespeak.perception import stereo
-
-    left, right, rig = pair
-    feats_r = future_r.result()
-    with _timed(timings, "stereo"):
-        result = stereo.stereo_points(
-            left,
-            right,
-            rig,
-            features_left=feats_l,
-            features_right=feats_r,
-            left_name=names[0],
-            right_name=names[1],
-            **opts[0].keywords(),
-        )
-    geometry = None
-    if len(result.points.xyz):  # else the chain stops with _no_matches_error
-        with _timed(timings, "geometry"):
-            geometry = geometry_for((left.shape[0], left.shape[1]), result, opts[1])
-    return StereoStage(feats_r, result, geometry)
 
 
 def _no_matches_error(src: Mapping[str, str], rig: Any, n_left: int, n_right: int) -> Exception:

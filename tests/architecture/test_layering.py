@@ -21,6 +21,7 @@ BASE = {"errors", "cleantext", "safeio", "safetext", "limits", "overrides"}
 #: The composition layer: the pipelines and the input readers that feed them.
 COMPOSE = {
     "pipeline",
+    "pipeline_threads",
     "description",
     "pipeline_rgbd",
     "rgbd_description",
