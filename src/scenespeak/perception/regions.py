@@ -150,7 +150,13 @@ def point_map(
 
 
 def _plane_from(p: NDArray[np.float64]) -> tuple[NDArray[np.float64], float] | None:
-    n = np.cross(p[1] - p[0], p[2] - p[0])
+    # The normal is the cross product of the two edges from p[0], as np.cross computes it (the
+    # same float64 differences and products, in the same order), without np.cross's ~0.1 ms
+    # of overhead per call (120 calls per scene).
+    (x0, y0, z0), (x1, y1, z1), (x2, y2, z2) = p.tolist()
+    a0, a1, a2 = x1 - x0, y1 - y0, z1 - z0
+    b0, b1, b2 = x2 - x0, y2 - y0, z2 - z0
+    n = np.array([a1 * b2 - a2 * b1, a2 * b0 - a0 * b2, a0 * b1 - a1 * b0])
     norm = float(np.linalg.norm(n))
     if norm < 1e-12:
         return None
