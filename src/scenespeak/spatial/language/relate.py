@@ -173,15 +173,17 @@ def _ordered_relations(
         t,
     )
     vertical = _verticals(argument, referent, inter / np.maximum(smaller, 1e-300), extents, t)
-    has_vertical = np.array([v is not None for v in vertical], dtype=bool).reshape(-1)
-    confidence = np.where(
-        has_vertical,
-        np.maximum(decisions.confidence, np.minimum(1.0, 2.0 * overlap)),
-        decisions.confidence,
-    )
+    confidence = decisions.confidence
+    if extents is not None:  # without heights no row has a vertical relation
+        has_vertical = np.array([v is not None for v in vertical], dtype=bool).reshape(-1)
+        confidence = np.where(
+            has_vertical, np.maximum(confidence, np.minimum(1.0, 2.0 * overlap)), confidence
+        )
     confidence = np.minimum(np.maximum(confidence, 0.0), 1.0)
+    table = np.empty(len(labels), dtype=object)
+    table[:] = labels  # the label strings themselves, gathered without a Python loop
     rows = _Rows(
-        names=([labels[k] for k in argument.tolist()], [labels[k] for k in referent.tolist()]),
+        names=(table[argument].tolist(), table[referent].tolist()),
         words=_words(decisions),
         vertical=vertical,
         hybrid=scene.hybrid.tolist(),
