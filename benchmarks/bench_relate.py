@@ -3,7 +3,9 @@
 Prints, for n = 10, 25, 50, 100 convex hulls of 8-22 vertices (5-25 cm across, laid out on a
 floor like the pipeline's objects), the median (and best) time of ``relate_objects`` and its
 parts: preparing and sweeping all pairs (``forces.prepare`` + ``forces.f0_f2_pairs``) and the
-rest (overlaps, degrees of truth, rule base, sentences, results). The sizes are timed in
+rest (overlaps, degrees of truth, rule base, sentences, results), and what a caller pays who
+reads every result (``relate_objects`` and then every relation's ``to_dict()``; the results
+are freed inside the timer in both). The sizes are timed in
 rounds (each size once per round), so that a busy machine's swings fall on all sizes alike.
 The growth exponent between consecutive sizes is ``log(t2 / t1) / log(n2 / n1)`` (2 means
 time grows as the number of pairs). For the smaller scenes it also times the per-pair path
@@ -65,6 +67,12 @@ def per_pair(hulls: list[NDArray[np.float64]], names: list[str]) -> list[str]:
     return [found[i, j] for i in range(n) for j in range(n) if i != j]
 
 
+def read_all(hulls: list[NDArray[np.float64]], names: list[str]) -> int:
+    """``relate_objects``, then every relation's ``to_dict()`` (what a caller that reads every
+    result, e.g. for JSON, pays); the dicts and results are freed before it returns."""
+    return len([rel.to_dict() for rel, _ in relate_objects(hulls, names=names)])
+
+
 def median_s(fn: Callable[[], object], repeat: int, clock: Callable[[], float]) -> float:
     fn()
     times = []
@@ -114,14 +122,14 @@ def main() -> None:
     print(f"compiled kernel: {compiled()}; clock: {args.clock}; medians\n")
     print(
         "| objects | ordered pairs | relate_objects, median (best) (s) | of which forces (s) "
-        "| rest (s) "
+        "| rest (s) | with every to_dict() (s) "
         "| growth | per-pair path (s) | speed-up | peak memory (MB) | per pair (kB) |"
     )
-    print("| ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
+    print("| ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
     scenes = {n: (scene(n), [f"object {k}" for k in range(n)]) for n in args.sizes}
     # Rounds: every size once per round, so that the load's swings fall on all sizes alike.
     rounds = 3 if args.quick else 7
-    times: dict[int, list[tuple[float, float]]] = {n: [] for n in args.sizes}
+    times: dict[int, list[tuple[float, float, float]]] = {n: [] for n in args.sizes}
     for hulls, names in scenes.values():
         relate_objects(hulls, names=names)  # warm: imports, kernel, caches
     for _ in range(rounds):
@@ -130,13 +138,15 @@ def main() -> None:
             forces_only = timed(
                 lambda h=hulls: f0_f2_pairs([prepare(p, "o") for p in h], directions=180), clock
             )
-            times[n].append((total, forces_only))
+            read = timed(lambda h=hulls, nm=names: read_all(h, nm), clock)
+            times[n].append((total, forces_only, read))
     last: tuple[int, float] | None = None
     first: tuple[int, float] | None = None
     for n, (hulls, names) in scenes.items():
-        total = statistics.median(t for t, _ in times[n])
-        best = min(t for t, _ in times[n])
-        forces_only = statistics.median(f for _, f in times[n])
+        total = statistics.median(t for t, _, _ in times[n])
+        best = min(t for t, _, _ in times[n])
+        forces_only = statistics.median(f for _, f, _ in times[n])
+        read = statistics.median(r for _, _, r in times[n])
         reference, ratio = "", ""
         if n <= args.per_pair_up_to:
             said = [rel.sentence for rel, _ in relate_objects(hulls, names=names)]
@@ -149,7 +159,8 @@ def main() -> None:
         growth = "" if last is None else f"{math.log(total / last[1]) / math.log(n / last[0]):.2f}"
         print(
             f"| {n} | {n * (n - 1)} | {total:.3f} ({best:.3f}) | {forces_only:.3f} "
-            f"| {total - forces_only:.3f} | {growth} | {reference} | {ratio} | {memory:.1f} "
+            f"| {total - forces_only:.3f} | {read:.3f} | {growth} | {reference} | {ratio} "
+            f"| {memory:.1f} "
             f"| {1e3 * memory / max(n * (n - 1), 1):.1f} |"
         )
         first = first or (n, total)
