@@ -390,6 +390,32 @@ def test_coverages_and_sector_shares_match_the_rules(seed: int, nbins: int) -> N
         assert shares[r].tolist() == [rules._sector_share(h[r], d) for d in DIRECTIONS]
 
 
+@settings(max_examples=40, deadline=None)
+@given(seeds, st.sampled_from([8, 36, 180, 360]))
+def test_compiled_coverages_match_the_rules(seed: int, nbins: int) -> None:
+    """The compiled window counts (used where Numba is loaded) give the reference's
+    coverages, plateaus at the level and rows the guard sends to the reference included."""
+    from scenespeak.spatial.forces import _jit
+
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv("SCENESPEAK_NUMBA", "always")
+        if not _jit.available() or _jit._numba() is None:
+            pytest.skip("Numba is not installed")
+        assert batch._compiled_counts() is not None
+        rng = np.random.default_rng(seed)
+        h = _sparse_histograms(rng, int(rng.integers(1, 30)), nbins)
+        h[0] = 0.0
+        if len(h) > 1:
+            h[1] = np.where(np.arange(nbins) % 3 == 0, 1.0, 0.1)
+        if len(h) > 2:
+            h[2] = 1.0  # every window equal: all covered
+        for t in (DEFAULT_THRESHOLDS, Thresholds(coverage_smooth_deg=30.0, coverage_level=0.5)):
+            got = batch.coverages(h, t)
+            assert got.tolist() == [rules._coverage(row, t) for row in h]
+        mp.setenv("SCENESPEAK_NUMBA", "never")
+        assert batch._compiled_counts() is None
+
+
 # Degrees drawn from the thresholds themselves and their neighbours, so that every comparison
 # of the rule base meets equality and ties.
 _EDGES = sorted(

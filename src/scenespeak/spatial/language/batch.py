@@ -19,6 +19,7 @@ Codes of :class:`PairDecisions` (``-1`` is None):
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -103,6 +104,15 @@ def _block_coverages(f0: NDArray[np.float64], t: Thresholds) -> NDArray[np.float
     rows, nbins = f0.shape
     k = round(t.coverage_smooth_deg / (360.0 / nbins))
     top = f0.max(axis=1)
+    kernel = _compiled_counts() if 0 < k and 2 * k + 1 <= nbins else None
+    if kernel is not None:
+        # The same counts in one compiled pass (the same guard: rows it cannot tell go to
+        # the reference), where Numba is loaded already (for the force sweep).
+        counts, exact = kernel(np.ascontiguousarray(f0), k, t.coverage_level)
+        out = np.where(top > 0.0, counts / nbins, 0.0)
+        for r in np.flatnonzero(~exact & (top > 0.0)).tolist():
+            out[r] = _coverage(f0[r], t)
+        return out
     if k <= 0 or 2 * k + 1 > nbins:
         # No smoothing: the reference's own operations. A window wider than the histogram:
         # the reference row by row.
@@ -123,6 +133,67 @@ def _block_coverages(f0: NDArray[np.float64], t: Thresholds) -> NDArray[np.float
     for r in np.flatnonzero(~exact & (top > 0.0)).tolist():
         out[r] = _coverage(f0[r], t)
     return out
+
+
+def _window_counts(
+    f0: NDArray[np.float64], k: int, level: float
+) -> tuple[NDArray[np.int64], NDArray[np.bool_]]:
+    """Per row: the bins whose circular window of ``2k + 1`` bins holds at least ``level`` of
+    the largest window's sum, and whether no window lies within ``1e-9`` of the row's padded
+    mass of that level (else the rounding could tell; :func:`_block_coverages`' guard).
+
+    Plain loops for Numba (:func:`_compiled_counts`); a sliding sum, whose rounding (about
+    ``nbins`` ulps of the mass) stays far inside the guard.
+    """
+    rows, nbins = f0.shape
+    counts = np.zeros(rows, dtype=np.int64)
+    exact = np.ones(rows, dtype=np.bool_)
+    window = np.empty(nbins)
+    for r in range(rows):
+        s = 0.0
+        for j in range(-k, k + 1):
+            s += f0[r, j % nbins]
+        mass = 0.0
+        for j in range(nbins):
+            mass += f0[r, j]
+        for j in range(k):
+            mass += f0[r, j] + f0[r, nbins - 1 - j]
+        top = s
+        enter, leave = k + 1, nbins - k  # the bins that enter and leave the next window
+        for b in range(nbins):
+            window[b] = s
+            if s > top:
+                top = s
+            s += f0[r, enter % nbins] - f0[r, leave]
+            enter += 1
+            leave = leave + 1 if leave + 1 < nbins else 0
+        cut = level * top
+        tol = 1e-9 * mass
+        n = 0
+        for b in range(nbins):
+            gap = window[b] - cut
+            if gap >= 0.0:
+                n += 1
+            if abs(gap) <= tol:
+                exact[r] = False
+        counts[r] = n
+    return counts, exact
+
+
+_KERNEL: list[object] = []
+
+
+def _compiled_counts() -> Callable[..., tuple[NDArray[np.int64], NDArray[np.bool_]]] | None:
+    """:func:`_window_counts` compiled, when Numba is loaded in this process (by the force
+    sweep; never loaded for this alone), else None. The counts are exact either way (rows
+    the guard cannot tell take the reference), so the choice never changes a result."""
+    from scenespeak.spatial.forces import _jit
+
+    if not _jit.loaded():
+        return None
+    if not _KERNEL:
+        _KERNEL.append(_jit.jit(_window_counts))
+    return _KERNEL[0]  # type: ignore[return-value]
 
 
 def sector_shares(f0: NDArray[np.float64]) -> NDArray[np.float64]:
