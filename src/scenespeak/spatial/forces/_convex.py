@@ -19,14 +19,23 @@ interval of negative length.
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from scenespeak.spatial.forces._jit import jit, jit_inline
 
 # As in _sweep (the reference's _TAYLOR_RATIO).
 TAYLOR_RATIO = 1e-3
+LN2 = 0.6931471805599453
+# The bits of sqrt(1/2) and of a float64's mantissa (_logs reduces to [sqrt(1/2), sqrt(2))).
+_SQRT_HALF_BITS = 0x3FE6A09E667F3BCD
+_MANTISSA = 0x000FFFFFFFFFFFFF
+# Rows of chain_scratch after the four chains' 12: a merge's gaps, widths, logarithms, the
+# bits of the reduced arguments, and four rows of terms.
+GAP = 12
+WIDTH = 13
+LOG = 14
+BITS = 15
+TERMS = 16
 
 
 @jit_inline
@@ -115,12 +124,6 @@ def _step(k: int, step: int, lo_g: int, hi_g: int) -> int:
 
 
 @jit_inline
-def _psi2(u: float) -> float:
-    """Ψ of gravitational forces, ``u - u log u`` (0 at u = 0)."""
-    return u - u * math.log(u) if u > 0.0 else 0.0
-
-
-@jit_inline
 def _chain(
     pts: np.ndarray,
     cs: tuple[float, float],
@@ -129,13 +132,15 @@ def _chain(
     shift: tuple[float, float],
     span: tuple[float, float],
     out: np.ndarray,
+    row: int,
 ) -> None:
-    """One chain's breakpoints over the lines ``span = (t, t_end)``, into ``out`` (3 rows).
+    """One chain's breakpoints over the lines ``span = (t, t_end)``, into rows ``row:row + 3``
+    of ``out`` (rows, not views of them: a view costs two atomic reference counts).
 
-    ``out[0, i]``, ``out[1, i]``: ``v`` and ``s`` of the chain's i-th breakpoint, from the
+    ``out[row, i]``, ``out[row + 1, i]``: ``v`` and ``s`` of the chain's i-th breakpoint, from the
     start of the edge whose range of lines holds ``t`` to the first vertex at or above
     ``t_end`` (``v`` made non-decreasing by a running maximum, B shifted into A's frame by
-    ``shift``); ``out[2, i]``: the slope ``ds/dv`` of edge i (0 for an edge of no height).
+    ``shift``); ``out[row + 2, i]``: the slope ``ds/dv`` of edge i (0 for an edge of no height).
     Each edge's slope is computed once per direction, for both merges the chain takes part in.
     """
     t, t_end = span
@@ -151,112 +156,193 @@ def _chain(
         if vn > t:
             break
         k, v, s = n, vn, _vs(pts, n, cs)[1] + shift[1]
-    out[0, 0] = v
-    out[1, 0] = s
+    out[row, 0] = v
+    out[row + 1, 0] = s
     m = 0
     while True:
         n = _step(k, step, r[0], r[1])
         vn, sn = _vs(pts, n, cs)
         vn = max(vn + shift[0], v)
         sn += shift[1]
-        out[2, m] = (sn - s) / (vn - v) if vn > v else 0.0
+        out[row + 2, m] = (sn - s) / (vn - v) if vn > v else 0.0
         m += 1
-        out[0, m] = vn
-        out[1, m] = sn
+        out[row, m] = vn
+        out[row + 1, m] = sn
         if n == r[3] or vn >= t_end:
             return
         k, v, s = n, vn, sn
 
 
 @jit_inline
-def _same_side_f2(
-    a0: float, a1: float, weight: float, psi: tuple[float, bool]
-) -> tuple[float, float, bool]:
-    """``(F2 term, Ψ(a1), whether it was computed)``: ``weight`` times the mean of Φ⁺ = -log
-    over a gap going from a0 to a1 (absolute values, same sign; ``_sweep._mean_f2``), with
-    ``psi = (Ψ(a0), known)`` from the previous interval."""
-    h = a1 - a0
-    m = 0.5 * (a0 + a1)
-    if abs(h) <= TAYLOR_RATIO * m:
-        if m > 0.0:
-            return weight * (-math.log(m) + (1.0 / (m * m)) * h * h / 24.0), 0.0, False
-        return 0.0, 0.0, False
-    p0 = psi[0] if psi[1] else _psi2(a0)
-    p1 = _psi2(a1)
-    return weight * ((p1 - p0) / h), p1, True
+def _logs(buf: np.ndarray, ints: np.ndarray, n: int) -> None:
+    """``buf[LOG, k] = log(max(|buf[GAP, k]|, 1e-300))`` for ``k < n``, in loops the compiler
+    vectorises (the C library's ``log`` is one call per value): ``x = 2**e * m`` with ``m`` in
+    ``[sqrt(1/2), sqrt(2))`` from the bits (``ints``, the same memory as int64), ``log m = 2
+    atanh(f)``, ``f = (m - 1) / (m + 1)``, by its series to ``f**23`` (``|f| <= 0.172``:
+    truncation below 1e-18; within 3e-16 of ``math.log`` relative)."""
+    for k in range(n):
+        u = abs(buf[GAP, k])
+        b = ints[GAP, k] & 0x7FFFFFFFFFFFFFFF
+        b = b if u > 1e-300 else np.int64(0x01A56E1FC2F8F359)  # the bits of 1e-300
+        t = b - _SQRT_HALF_BITS
+        ints[BITS, k] = (t & _MANTISSA) + _SQRT_HALF_BITS
+        buf[LOG, k] = float(t >> 52)
+    for k in range(n):
+        m = buf[BITS, k]
+        f = (m - 1.0) / (m + 1.0)
+        s = f * f
+        p = 1.0 / 21.0 + s * (1.0 / 23.0)
+        p = 1.0 / 19.0 + s * p
+        p = 1.0 / 17.0 + s * p
+        p = 1.0 / 15.0 + s * p
+        p = 1.0 / 13.0 + s * p
+        p = 1.0 / 11.0 + s * p
+        p = 1.0 / 9.0 + s * p
+        p = 1.0 / 7.0 + s * p
+        p = 1.0 / 5.0 + s * p
+        p = 1.0 / 3.0 + s * p
+        buf[LOG, k] = buf[LOG, k] * LN2 + (2.0 * f + 2.0 * f * (s * p))
 
 
 @jit_inline
-def _interval(
-    d: float, dn: float, weight: float, psi: tuple[float, bool]
-) -> tuple[float, float, float, float, float, bool]:
-    """``(6 F0(θ), F2(θ), 6 F0(θ + π), F2(θ + π), Ψ(|dn|), known)`` of one interval whose gap
-    goes linearly from ``d`` to ``dn`` (``_sweep._f0_f2_terms``), ``psi = (Ψ(|d|), known)``;
-    nothing for an interval of zero length (``weight`` 0)."""
-    if weight == 0.0:
-        return 0.0, 0.0, 0.0, 0.0, 0.0, False
-    if d * dn < 0.0:  # the gap changes sign: split at its zero
-        p0 = psi[0] if psi[1] else _psi2(abs(d))
-        p1 = _psi2(abs(dn))
-        total = abs(d) + abs(dn)
-        top = d if d > dn else dn
-        bottom = dn if d > dn else d
-        frac = top / total
-        f0p = weight * frac * (top * top)
-        f0n = weight * (1.0 - frac) * (bottom * bottom)
-        f2p = weight * ((p0 if d > dn else p1) / total)
-        f2n = weight * ((p1 if d > dn else p0) / total)
-        return f0p, f2p, f0n, f2n, p1, True
-    a0 = abs(d)
-    a1 = abs(dn)
-    f0 = weight * (a0 * a0 + a0 * a1 + a1 * a1)
-    f2, p1, known = _same_side_f2(a0, a1, weight, psi)
-    if d + dn < 0.0:
-        return 0.0, 0.0, f0, f2, p1, known
-    return f0, f2, 0.0, 0.0, p1, known
+def _merge(buf: np.ndarray, rows: tuple[int, int], span: tuple[float, float]) -> int:
+    """Merge one chain of A and one of B: the gap at every breakpoint into ``buf[GAP]``
+    (``buf[GAP, q]`` at the start of interval q, ``buf[GAP, n]`` at the end of the last), each
+    interval's ``t_q - t_(q+1)`` (<= 0) into ``buf[WIDTH]``; returns the number of intervals.
+
+    ``rows = (ra, rb)``: the chains' first rows in ``buf`` (:func:`_chain`, B in A's frame);
+    ``span = (t, t_end)`` the lines that meet both regions. Each chain advances by a comparison
+    added to its index, not by a branch: which chain breaks next is as good as random, and a
+    mispredicted branch per interval cost more than the interval's arithmetic.
+    """
+    t, t_end = span
+    ra, rb = rows
+    i = 0
+    j = 0
+    buf[GAP, 0] = (buf[ra + 1, 0] + buf[ra + 2, 0] * (t - buf[ra, 0])) - (
+        buf[rb + 1, 0] + buf[rb + 2, 0] * (t - buf[rb, 0])
+    )
+    q = 0
+    while True:
+        vna = buf[ra, i + 1]
+        vnb = buf[rb, j + 1]
+        tn = min(vna, vnb, t_end)
+        xa = (
+            buf[ra + 1, i + 1] if tn == vna else buf[ra + 1, i] + buf[ra + 2, i] * (tn - buf[ra, i])
+        )
+        xb = (
+            buf[rb + 1, j + 1] if tn == vnb else buf[rb + 1, j] + buf[rb + 2, j] * (tn - buf[rb, j])
+        )
+        buf[WIDTH, q] = t - tn
+        q += 1
+        buf[GAP, q] = xa - xb
+        if tn >= t_end:
+            return q
+        i += vna <= tn
+        j += vnb <= tn
+        t = tn
+
+
+@jit_inline
+def _mean_f2(a: tuple[float, float], logs: tuple[float, float], psi: tuple[float, float]) -> float:
+    """The mean of Φ⁺ = -log over a gap going linearly from ``a[0]`` to ``a[1]`` (same sign,
+    absolute values), from their logarithms and ``Ψ``: the divided difference of ``Ψ``, or its
+    series where ``|h| <= 1e-3 m`` (see :func:`_terms`); selects only, no branch."""
+    h = a[1] - a[0]
+    m = 0.5 * (a[0] + a[1])
+    mm = m if m > 0.0 else 1.0
+    hh = h if h != 0.0 else 1.0
+    x2 = (h * h) / (4.0 * (mm * mm))
+    log_m = 0.5 * (logs[0] + logs[1]) + x2 * (0.5 + 0.25 * x2)
+    mean = -log_m + x2 / 6.0 if abs(h) <= TAYLOR_RATIO * m else (psi[1] - psi[0]) / hh
+    return mean if m > 0.0 else 0.0
+
+
+@jit_inline
+def _crossing(
+    d: float, dn: float, w: float, psi: tuple[float, float]
+) -> tuple[float, float, float, float]:
+    """The terms of an interval whose gap goes from ``d`` to ``dn`` through zero, split there:
+    ``(6 F0(θ), F2(θ), 6 F0(θ + π), F2(θ + π))``, ``psi = (Ψ(|d|), Ψ(|dn|))`` (selects
+    only; finite whatever the signs, used only when ``d * dn < 0``)."""
+    cross = d * dn < 0.0
+    inv = 1.0 / (abs(d) + abs(dn) if cross else 1.0)
+    top = d if d > dn else dn
+    bottom = dn if d > dn else d
+    frac = top * inv
+    return (
+        w * frac * (top * top),
+        w * ((psi[0] if d > dn else psi[1]) * inv),
+        w * (1.0 - frac) * (bottom * bottom),
+        w * ((psi[1] if d > dn else psi[0]) * inv),
+    )
+
+
+@jit_inline
+def _terms(buf: np.ndarray, n: int, sign: float) -> None:
+    """Each interval's ``6 F0(θ), F2(θ), 6 F0(θ + π), F2(θ + π)`` into ``buf[TERMS:TERMS + 4,
+    q]`` (:func:`_sweep._f0_f2_terms`; Matsakis & Wendling 1999) from the gaps ``buf[GAP]``,
+    the widths ``buf[WIDTH]`` and ``log |gap|`` in ``buf[LOG]``, with selects instead of
+    branches so that the loop is vectorised. ``sign``: the product of the chains' signs.
+
+    A gap going from ``d`` to ``dn`` (absolute values ``a0``, ``a1``, ``h = a1 - a0``,
+    ``m = (a0 + a1) / 2``) on one side of zero gives ``w (a0² + a0 a1 + a1²)`` and ``w (Ψ(a1) -
+    Ψ(a0)) / h`` with ``Ψ(u) = u - u log u``, or for ``|h| <= 1e-3 m`` the series ``w (-log m +
+    h² / (24 m²))`` with ``log m = (log a0 + log a1) / 2 + x² / 2 + x⁴ / 4``, ``x = h / (2m)``
+    (``log(1 - x²) = -x² - x⁴ / 2 - ...``); a gap changing sign is split at its zero.
+    """
+    for q in range(n):
+        d = buf[GAP, q]
+        dn = buf[GAP, q + 1]
+        w = sign * buf[WIDTH, q]
+        a0 = abs(d)
+        a1 = abs(dn)
+        logs = (buf[LOG, q], buf[LOG, q + 1])
+        psi = (a0 - a0 * logs[0], a1 - a1 * logs[1])
+        f0 = w * (a0 * a0 + a0 * a1 + a1 * a1)
+        f2 = w * _mean_f2((a0, a1), logs, psi)
+        c0p, c2p, c0n, c2n = _crossing(d, dn, w, psi)
+        cross = d * dn < 0.0
+        neg = d + dn < 0.0
+        buf[TERMS, q] = c0p if cross else (0.0 if neg else f0)
+        buf[TERMS + 1, q] = c2p if cross else (0.0 if neg else f2)
+        buf[TERMS + 2, q] = c0n if cross else (f0 if neg else 0.0)
+        buf[TERMS + 3, q] = c2n if cross else (f2 if neg else 0.0)
 
 
 @jit_inline
 def chain_pair(
-    ca: np.ndarray, cb: np.ndarray, sign: float, span: tuple[float, float]
+    buf: np.ndarray, ints: np.ndarray, rows: tuple[int, int], sign: float, span: tuple[float, float]
 ) -> tuple[float, float, float, float]:
     """``(F0(θ) * 6, F2(θ), F0(θ + π) * 6, F2(θ + π))`` of one chain of A and one of B.
 
-    ``ca``, ``cb``: the chains' breakpoints and slopes (:func:`_chain`, B in A's frame);
-    ``sign``: the product of the chains' signs (+1 for a right chain, -1 for a left one);
-    ``span = (t, t_end)`` the lines that meet both regions. The merge advances each chain by
-    a comparison added to its index, not by a branch: which chain breaks next is as good as
-    random, and a mispredicted branch per interval cost more than the interval's arithmetic.
+    ``buf``: :func:`chain_scratch` (``ints`` the same memory as int64) holding the chains at
+    ``rows`` (:func:`_chain`); ``sign``: the product of their signs (+1 for a right chain, -1
+    for a left one); ``span = (t, t_end)``. Three passes: the merge (sequential), the
+    logarithms and the interval terms (vectorised), then the sums in interval order.
     """
-    t, t_end = span
-    i = 0
-    j = 0
-    d = (ca[1, 0] + ca[2, 0] * (t - ca[0, 0])) - (cb[1, 0] + cb[2, 0] * (t - cb[0, 0]))
-    psi = 0.0  # Ψ(|d|) when known
-    known = False
+    n = _merge(buf, rows, span)
+    _logs(buf, ints, n + 1)
+    _terms(buf, n, sign)
     f0p = 0.0
     f2p = 0.0
     f0n = 0.0
     f2n = 0.0
-    while True:
-        vna = ca[0, i + 1]
-        vnb = cb[0, j + 1]
-        tn = min(vna, vnb, t_end)
-        xa = ca[1, i + 1] if tn == vna else ca[1, i] + ca[2, i] * (tn - ca[0, i])
-        xb = cb[1, j + 1] if tn == vnb else cb[1, j] + cb[2, j] * (tn - cb[0, j])
-        dn = xa - xb
-        x0, x2, y0, y2, psi, known = _interval(d, dn, sign * (t - tn), (psi, known and tn > t))
-        f0p += x0
-        f2p += x2
-        f0n += y0
-        f2n += y2
-        if tn >= t_end:
-            break
-        i += vna <= tn
-        j += vnb <= tn
-        t = tn
-        d = dn
+    for q in range(n):
+        f0p += buf[TERMS, q]
+        f2p += buf[TERMS + 1, q]
+        f0n += buf[TERMS + 2, q]
+        f2n += buf[TERMS + 3, q]
     return f0p, f2p, f0n, f2n
+
+
+@jit_inline
+def chain_scratch(region_start: np.ndarray) -> np.ndarray:
+    """Scratch for :func:`walk_convex` on regions ``region_start[g]:region_start[g + 1]``: four
+    chains of 3 rows, then the rows ``GAP`` to ``TERMS + 3`` of a merge, each row as long as
+    two chains (a merge has at most both chains' breakpoints)."""
+    size = np.diff(region_start).max()
+    return np.empty((TERMS + 4, 2 * size + 3))
 
 
 @jit
@@ -270,7 +356,7 @@ def walk_convex(
 ) -> tuple[float, float, float, float]:
     """F0 and F2 of two convex regions in one direction: the four chain pairs.
 
-    ``scratch``: at least ``(4, 3, n + 1)`` floats, ``n`` the larger region's vertex count.
+    ``scratch``: :func:`chain_scratch` of the larger region's vertex count.
     Returns ``(F0(θ), F2(θ), F0(θ + π), F2(θ + π))``, as ``_sweep._walk_f0_f2``.
     """
     t_end = min(_vs(pts, ra[3], cs)[0], _vs(pts, rb[3], cs)[0] + shift[0])
@@ -285,7 +371,8 @@ def walk_convex(
     steps = (1, -1, 1, -1)
     shifts = (none, none, shift, shift)
     for k in range(4):
-        _chain(pts, cs, regions[k], steps[k], shifts[k], span, scratch[k])
+        _chain(pts, cs, regions[k], steps[k], shifts[k], span, scratch, 3 * k)
+    ints = scratch.view(np.int64)
     merges = ((0, 2), (0, 3), (1, 2), (1, 3))
     t0 = 0.0
     t2 = 0.0
@@ -293,7 +380,7 @@ def walk_convex(
     p2 = 0.0
     for k in range(4):
         i, j = merges[k]
-        x = chain_pair(scratch[i], scratch[j], float(steps[i] * steps[j]), span)
+        x = chain_pair(scratch, ints, (3 * i, 3 * j), float(steps[i] * steps[j]), span)
         t0 += x[0]
         t2 += x[1]
         p0 += x[2]
@@ -321,8 +408,7 @@ def convex_pair(
     chained = np.ones(2, dtype=np.bool_)
     low_high = np.zeros((2, 2), dtype=np.int64)
     extent = np.empty((2, 2))
-    size = max(region_start[1] - region_start[0], region_start[2] - region_start[1])
-    scratch = np.empty((4, 3, size + 1))
+    scratch = chain_scratch(region_start)
     ox = origin[1, 0] - origin[0, 0]
     oy = origin[1, 1] - origin[0, 1]
     for d in range(half):

@@ -30,7 +30,7 @@ from typing import TypeVar
 
 import numpy as np
 
-from scenespeak.spatial.forces._convex import track_extremes, walk_convex
+from scenespeak.spatial.forces._convex import chain_scratch, track_extremes, walk_convex
 from scenespeak.spatial.forces._jit import jit
 from scenespeak.spatial.forces._table import _tables
 
@@ -411,7 +411,7 @@ def sweep(
     fast = n_k == 2 and codes[0] == 0 and codes[1] == 1
     chains, table, chained = _convex_pairs(convex, pair_a, pair_b, fast)
     low_high = np.zeros((region_start.size - 1, 2), dtype=np.int64)
-    chain_scratch = np.empty((4, 3, np.diff(region_start).max() + 1))  # walk_convex's chains
+    scratch = chain_scratch(region_start)  # walk_convex's
     for d in range(half):
         theta = 2.0 * math.pi * d / directions
         c = math.cos(theta)
@@ -435,7 +435,7 @@ def sweep(
                     (a0, a1, low_high[ga, 0], low_high[ga, 1]),
                     (b0, b1, low_high[gb, 0], low_high[gb, 1]),
                     (dvb, ox * c + oy * s),
-                    chain_scratch,
+                    scratch,
                 )
                 out[p, 0, d] += t0
                 out[p, 1, d] += t2
