@@ -38,6 +38,7 @@ from scenespeak.perception.regions import (
     segment,
     support_plane,
 )
+from scenespeak.perception.scene_instances import SplitOptions, merge_split_instances
 from scenespeak.perception.scene_unknown import (
     even_sample,
     name_instances,
@@ -94,6 +95,9 @@ class RegionStageOptions:
         the one unclaimed segment with at least ``lone_share`` of its pixels inside its
         outline, when its keypoints lie within ``lone_gap`` pixels of it (median); otherwise
         it is not placed (never at the depth of what stands in front of it).
+    split : SplitOptions
+        Two detections of one label closer in 3-D than one object's size are one object
+        (:func:`~scenespeak.perception.scene_instances.merge_split_instances`).
     """
 
     regions: RegionOptions = field(default_factory=RegionOptions)
@@ -113,6 +117,7 @@ class RegionStageOptions:
     vote_lead: float = 2.0
     lone_share: float = 0.5
     lone_gap: float = 12.0
+    split: SplitOptions = field(default_factory=SplitOptions)
 
 
 @dataclass(frozen=True, eq=False)
@@ -356,13 +361,19 @@ def objects_from_regions(
         owners,
         own,
     )
-    objects: list[SceneObject] = []
+    placed: list[tuple[SceneObject, NDArray[np.float64], int]] = []
     skipped: list[Skipped] = []
     for i, det in enumerate(dets):
         got = _known_object(work, i, det)
-        (objects if isinstance(got, SceneObject) else skipped).append(got)  # type: ignore[arg-type]
+        if isinstance(got, SceneObject):
+            placed.append((got, np.asarray(det.outline_in_scene, np.float64), seg_of[i]))
+        else:
+            skipped.append(got)
     if geo is None:
-        return objects, skipped, geo
+        return [obj for obj, _, _ in placed], skipped, geo
+    # two faces of one box verified as two instances are one object (scene_instances)
+    focal = float(np.asarray(inp.dense.rect.rig.K_left)[0, 0])
+    objects = merge_split_instances(placed, inp.up, focal, work.kw, opts.split)
     residual = _residual(geo, work.taken, opts)
     claimed = _voted_objects(work, residual, objects)
     name_instances(objects)
