@@ -75,7 +75,7 @@ def test_keypoint_votes_name_a_segment_but_chance_matches_do_not() -> None:
     opts = RegionStageOptions()
     # a second instance of a mug verified elsewhere in the scene: 4 votes are enough
     assert vote_segments(seg, xy, matched, names, set(), opts, frozenset({"mug"})) == [
-        (0, "mug", 4)
+        (0, "mug", 4, -1)
     ]
     # a mug verified nowhere needs min_votes (8)
     assert vote_segments(seg, xy, matched, names, set(), opts) == []
@@ -106,3 +106,29 @@ def test_object_mask_on_a_plain_background() -> None:
     assert iou > 0.9
     full = rng.integers(0, 255, (240, 320, 3)).astype(np.uint8)  # fills the frame
     assert object_mask(full) is None
+
+
+def test_votes_name_a_segment_only_when_they_agree_in_scale_and_orientation() -> None:
+    """A texture that only looks like a learnt one (bricks voting for a photo of a lattice
+    tower, on the tuning set with the crate left out of the database) gives many votes whose
+    scale ratios and orientation differences scatter; one object seen once gives votes that
+    agree (Lowe 2004, sec. 7)."""
+    lab = np.full((60, 60), -1, np.int32)
+    lab[5:45, 5:45] = 0
+    seg = Segments(lab, np.array([1600]), 0.0)
+    rng = np.random.default_rng(1)
+    xy = np.array([[6.0 + 3 * i, 10.0 + 2 * i] for i in range(12)])  # 12 distinct positions
+    matched = np.full(12, 7)
+    names = {7: "cereal"}
+    opts = RegionStageOptions()
+    agree = (np.full(12, 0.5, np.float32), np.full(12, 90.0, np.float32))
+    assert vote_segments(seg, xy, matched, names, set(), opts, frozenset(), agree) == [
+        (0, "cereal", 12, 12)
+    ]
+    scatter = (
+        (2.0 ** rng.uniform(-3, 3, 12)).astype(np.float32),
+        rng.uniform(0, 360, 12).astype(np.float32),
+    )
+    assert vote_segments(seg, xy, matched, names, set(), opts, frozenset(), scatter) == []
+    # without the labelling's match geometry the votes alone decide (as before)
+    assert vote_segments(seg, xy, matched, names, set(), opts) == [(0, "cereal", 12, -1)]

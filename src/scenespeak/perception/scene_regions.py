@@ -38,7 +38,7 @@ from scenespeak.perception.regions import (
     segment,
     support_plane,
 )
-from scenespeak.perception.scene_instances import SplitOptions, merge_split_instances
+from scenespeak.perception.scene_instances import SplitOptions, merge_split_instances, size_misfits
 from scenespeak.perception.scene_unknown import (
     even_sample,
     name_instances,
@@ -95,6 +95,9 @@ class RegionStageOptions:
         the one unclaimed segment with at least ``lone_share`` of its pixels inside its
         outline, when its keypoints lie within ``lone_gap`` pixels of it (median); otherwise
         it is not placed (never at the depth of what stands in front of it).
+    vote_agree : float
+        0.8 — ... and at least this share of the winner's matched keypoints agree in scale
+        and orientation (:func:`~scenespeak.perception.scene_unknown.agreeing_votes`).
     split : SplitOptions
         Two detections of one label closer in 3-D than one object's size are one object
         (:func:`~scenespeak.perception.scene_instances.merge_split_instances`).
@@ -117,6 +120,7 @@ class RegionStageOptions:
     vote_lead: float = 2.0
     lone_share: float = 0.5
     lone_gap: float = 12.0
+    vote_agree: float = 0.8
     split: SplitOptions = field(default_factory=SplitOptions)
 
 
@@ -361,19 +365,9 @@ def objects_from_regions(
         owners,
         own,
     )
-    placed: list[tuple[SceneObject, NDArray[np.float64], int]] = []
-    skipped: list[Skipped] = []
-    for i, det in enumerate(dets):
-        got = _known_object(work, i, det)
-        if isinstance(got, SceneObject):
-            placed.append((got, np.asarray(det.outline_in_scene, np.float64), seg_of[i]))
-        else:
-            skipped.append(got)
+    objects, skipped = _detected_objects(work, dets)
     if geo is None:
-        return [obj for obj, _, _ in placed], skipped, geo
-    # two faces of one box verified as two instances are one object (scene_instances)
-    focal = float(np.asarray(inp.dense.rect.rig.K_left)[0, 0])
-    objects = merge_split_instances(placed, inp.up, focal, work.kw, opts.split)
+        return objects, skipped, geo
     residual = _residual(geo, work.taken, opts)
     claimed = _voted_objects(work, residual, objects)
     name_instances(objects)
@@ -382,6 +376,26 @@ def objects_from_regions(
             geo.points, residual, inp.keypoints_xy, claimed, inp.up, opts, work.kw
         )
     return [volume_centre(o, inp.up) for o in objects], skipped, geo
+
+
+def _detected_objects(work: _Work, dets: list[Any]) -> tuple[list[SceneObject], list[Skipped]]:
+    """The detections' objects and those not placed; with the geometry, instances checked
+    and joined in metres (:mod:`~scenespeak.perception.scene_instances`)."""
+    placed: list[tuple[SceneObject, NDArray[np.float64], int]] = []
+    skipped: list[Skipped] = []
+    for i, det in enumerate(dets):
+        got = _known_object(work, i, det)
+        if isinstance(got, SceneObject):
+            placed.append((got, np.asarray(det.outline_in_scene, np.float64), work.seg_of[i]))
+        else:
+            skipped.append(got)
+    if work.geo is None:
+        return [obj for obj, _, _ in placed], skipped
+    focal = float(np.asarray(work.inp.dense.rect.rig.K_left)[0, 0])
+    misfits = size_misfits(placed, focal, work.opts.split)
+    skipped += [Skipped(placed[j][0].key, why) for j, why in misfits.items()]
+    placed = [p for j, p in enumerate(placed) if j not in misfits]
+    return merge_split_instances(placed, work.inp.up, focal, work.kw, work.opts.split), skipped
 
 
 def volume_centre(obj: SceneObject, up: NDArray[np.float64]) -> SceneObject:
@@ -550,16 +564,29 @@ def _voted_objects(work: _Work, residual: Segments, objects: list[SceneObject]) 
     if geo is None or not inp.id_to_label:
         return claimed
     verified = frozenset(d.label for d in inp.labelling.detections)
+    lab = inp.labelling
     voted = vote_segments(
-        residual, inp.keypoints_xy, inp.labelling.matched, inp.id_to_label, claimed, opts, verified
+        residual,
+        inp.keypoints_xy,
+        lab.matched,
+        inp.id_to_label,
+        claimed,
+        opts,
+        verified,
+        (lab.match_scale, lab.match_turn),
     )
-    for k, label, n_votes in voted:
+    for k, label, n_votes, agree in voted:
         pts = geo.points[residual.mask(k)].astype(np.float64)
         pts = even_sample(pts[np.all(np.isfinite(pts), axis=1)], opts.max_points)
         result = make_object(label, pts, inp.up, source="segment", **work.kw)
         if isinstance(result, SceneObject) and not near_same_label(result, objects):
             claimed.add(k)
             note = f"named by {n_votes} keypoint votes (no geometric check passed)"
+            if agree >= 0:
+                note = (
+                    f"named by {n_votes} keypoint votes, {agree} agreeing in scale and "
+                    "orientation (no geometric check passed)"
+                )
             objects.append(
                 dataclasses.replace(
                     result,

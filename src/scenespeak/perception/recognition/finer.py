@@ -260,4 +260,4 @@ def finer_search(
     for i, det in sorted(enumerate(detections), key=lambda t: any(t[1] is a for a in added)):
         free = det.inliers[labels[det.inliers] < 0]
         labels[free] = i
-    return Labelling(labels, detections, labelling.matched)
+    return dataclasses.replace(labelling, labels=labels, detections=detections)

@@ -49,6 +49,7 @@ class _Candidates:
     view: NDArray[np.int32]
     first_obj: NDArray[np.int32]
     passed: NDArray[np.bool_]
+    nearest: NDArray[np.int64]  # per query: its nearest training descriptor (-1: none)
 
 
 def _ratio_candidates(db: _Loaded, features: Features, o: LabelOptions) -> _Candidates:
@@ -79,7 +80,7 @@ def _ratio_candidates(db: _Loaded, features: Features, o: LabelOptions) -> _Cand
     _, first = np.unique(key, return_index=True)
     q_idx = rows[first].astype(np.intp)
     t_idx = t_all[first]
-    return _Candidates(q_idx, t_idx, db.view_of[t_idx], first_obj, passed)
+    return _Candidates(q_idx, t_idx, db.view_of[t_idx], first_obj, passed, ids[:, 0])
 
 
 def _detect_in_view(
@@ -240,6 +241,7 @@ def label_features(db: _Loaded, features: Features, o: LabelOptions) -> Labellin
         return Labelling(labels, (), matched)
     c = _ratio_candidates(db, features, o)
     matched[c.passed] = c.first_obj[c.passed]
+    scale, turn = _match_geometry(db, features, c)
     found = []
     for oid in np.unique(c.first_obj[c.q_idx]).tolist():
         found.extend(_detect_object(db, features, c, oid, need, o))
@@ -247,4 +249,19 @@ def label_features(db: _Loaded, features: Features, o: LabelOptions) -> Labellin
     detections = tuple(found)
     for i, det in enumerate(detections):
         labels[det.inliers] = i
-    return Labelling(labels, detections, matched)
+    return Labelling(labels, detections, matched, scale, turn)
+
+
+def _match_geometry(
+    db: _Loaded, features: Features, c: _Candidates
+) -> tuple[NDArray[np.float32], NDArray[np.float32]]:
+    """Per query keypoint that passed the ratio test: its scale over its nearest training
+    keypoint's and the orientation difference (degrees, [0, 360)); NaN elsewhere."""
+    n = len(features)
+    scale = np.full(n, np.nan, np.float32)
+    turn = np.full(n, np.nan, np.float32)
+    q = np.flatnonzero(c.passed)
+    t = c.nearest[q]
+    scale[q] = features.size[q] / np.maximum(db.size[t], 1e-6)
+    turn[q] = np.mod(features.angle[q] - db.angle[t], 360.0)
+    return scale, turn

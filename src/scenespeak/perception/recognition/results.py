@@ -122,12 +122,23 @@ class Labelling:
         it is seen more than once, ``LabelOptions.max_instances``).
     matched : (N,) int32
         Before the geometric check: the database object id each keypoint passed the ratio test
-        to, or ``-1``. For figures and diagnostics.
+        to, or ``-1``. For figures, diagnostics and the region stage's keypoint votes.
+    match_scale, match_turn : (N,) float32
+        For a keypoint that passed the ratio test, its SIFT scale over its nearest training
+        keypoint's, and its orientation minus that keypoint's (degrees, in [0, 360)); NaN
+        elsewhere. Votes of one object seen once agree in both (Lowe 2004, sec. 7: the Hough
+        transform's scale and orientation bins); chance matches do not. Empty: not computed.
     """
 
     labels: NDArray[np.int32]
     detections: tuple[Detection, ...]
     matched: NDArray[np.int32] = field(repr=False)
+    match_scale: NDArray[np.float32] = field(
+        default_factory=lambda: np.zeros(0, np.float32), repr=False
+    )
+    match_turn: NDArray[np.float32] = field(
+        default_factory=lambda: np.zeros(0, np.float32), repr=False
+    )
 
     def names(self) -> list[str | None]:
         """The label of each query keypoint, ``None`` where unknown."""
