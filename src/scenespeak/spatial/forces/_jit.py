@@ -188,6 +188,13 @@ def jit_inline(fn: F) -> F:
     return _compiled(fn, {**_OPTIONS, "inline": "always"})
 
 
+def jit_reassoc(fn: F) -> F:
+    """:func:`jit`, and the function's floating-point additions and multiplications may be
+    reassociated (Numba's ``fastmath={"reassoc"}``): for a sum over a loop, which the compiler
+    can then vectorise (the order of the terms changes, so the last bits of the sum do)."""
+    return _compiled(fn, {**_OPTIONS, "fastmath": {"reassoc"}})
+
+
 def _compiled(fn: F, options: dict[str, Any]) -> F:
     numba = _numba() if available() else None
     if numba is None:

@@ -30,6 +30,15 @@ from typing import TypeVar
 
 import numpy as np
 
+from scenespeak.spatial.forces._batch import (
+    collect_gaps,
+    grown,
+    integrate_gaps,
+    scratch_jit,
+)
+from scenespeak.spatial.forces._batch import (
+    f0_f2_terms as _f0_f2_terms,  # noqa: F401 - the name other modules' docs use
+)
 from scenespeak.spatial.forces._convex import chain_scratch, track_extremes, walk_convex
 from scenespeak.spatial.forces._jit import jit
 from scenespeak.spatial.forces._table import _tables
@@ -214,118 +223,26 @@ def _integrate(
 
 
 @jit
-def _f0_f2_terms(d0: float, d1: float, weight: float) -> tuple[float, float, float, float]:
-    """One edge pair's F0 and F2 terms at θ and at θ + π (``_integrate`` for codes 0 and 1).
-
-    The same operations as :func:`_mean_phi` for those two kernels, inlined: the gap goes
-    linearly from ``d0`` to ``d1``; where it is negative the pair serves θ + π. The F0 terms
-    are six times the mean (``a0² + a0 a1 + a1²``): the walk divides their sum by 6 once.
-    """
-    if d0 * d1 < 0.0:
-        top = d0 if d0 > d1 else d1
-        bottom = d1 if d0 > d1 else d0
-        frac = top / (abs(d0) + abs(d1))
-        w_pos = weight * frac
-        w_neg = weight * (1.0 - frac)
-        nb = -bottom
-        return (
-            w_pos * (top * top),
-            w_pos * _mean_f2(0.0, top),
-            w_neg * (nb * nb),
-            w_neg * _mean_f2(0.0, nb),
-        )
-    if d0 + d1 < 0.0:
-        a0 = -d0
-        a1 = -d1
-        return 0.0, 0.0, weight * (a0 * a0 + a0 * a1 + a1 * a1), weight * _mean_f2(a0, a1)
-    return weight * (d0 * d0 + d0 * d1 + d1 * d1), weight * _mean_f2(d0, d1), 0.0, 0.0
-
-
-@jit
-def _mean_f2(a0: float, a1: float) -> float:
-    """:func:`_mean_phi` for gravitational forces (code 1), inlined."""
-    h = a1 - a0
-    m = 0.5 * (a0 + a1)
-    if abs(h) <= TAYLOR_RATIO * m:
-        if m > 0.0:
-            return -math.log(m) + (1.0 / (m * m)) * h * h / 24.0
-        return 0.0
-    p0 = a0 - a0 * math.log(a0) if a0 > 0.0 else 0.0
-    p1 = a1 - a1 * math.log(a1) if a1 > 0.0 else 0.0
-    return (p1 - p0) / h
-
-
-@jit
-def _pair_terms(
-    srt: np.ndarray, e: int, f: int, dvb: float, dsb: float
-) -> tuple[float, float, float, float]:
-    """:func:`_f0_f2_terms` of A-edge row ``e`` and B-edge row ``f`` (B shifted by dvb, dsb)."""
-    lo_a = srt[e, 0]
-    hi_a = srt[e, 1]
-    lo_b = srt[f, 0] + dvb
-    hi_b = srt[f, 1] + dvb
-    lo = lo_a if lo_a > lo_b else lo_b
-    hi = hi_a if hi_a < hi_b else hi_b
-    if not hi > lo:
-        return 0.0, 0.0, 0.0, 0.0
-    weight = (srt[e, 4] * srt[f, 4]) * (lo - hi)
-    if weight == 0.0:
-        return 0.0, 0.0, 0.0, 0.0
-    s_a = srt[e, 2]
-    k_a = srt[e, 3]
-    s_b = srt[f, 2] + dsb
-    k_b = srt[f, 3]
-    d0 = (s_a + k_a * (lo - lo_a)) - (s_b + k_b * (lo - lo_b))
-    d1 = (s_a + k_a * (hi - lo_a)) - (s_b + k_b * (hi - lo_b))
-    return _f0_f2_terms(d0, d1, weight)
-
-
-@jit
 def _walk_f0_f2(
-    srt: np.ndarray, a0: int, a1: int, b0: int, b1: int, dvb: float, dsb: float
-) -> tuple[float, float, float, float]:
-    """F0 and F2 of one pair in one direction: :func:`_collect`'s two-pointer walk over the
-    sorted rows, each edge pair integrated on the spot (no buffer), sums kept in registers.
-
-    Returns ``(F0(θ), F2(θ), F0(θ + π), F2(θ + π))``.
+    srt: np.ndarray,
+    ranges: tuple[int, int, int, int],
+    shift: tuple[float, float],
+    bufs: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+    work: tuple[np.ndarray, np.ndarray],
+) -> int:
+    """F0 and F2 of one pair in one direction into ``work[1]`` = ``(F0(θ), F2(θ), F0(θ + π),
+    F2(θ + π))``: :func:`_collect`'s two-pointer walk over the sorted rows ``a0:a1, b0:b1 =
+    ranges``, the edge pairs in batches (:mod:`~scenespeak.spatial.forces._batch`: their
+    logarithms vectorised). Returns the number of pairs that did not fit in ``bufs``.
     """
-    t0 = 0.0
-    t2 = 0.0
-    p0 = 0.0
-    p2 = 0.0
-    j = b0
-    for i in range(a0, a1):
-        lo_a = srt[i, 0]
-        hi_a = srt[i, 1]
-        while j < b1 and srt[j, 0] + dvb < lo_a:
-            j += 1
-        if j == b1:
-            break  # every B-edge starts below this A-edge, hence below the rest
-        jj = j
-        while jj < b1 and srt[jj, 0] + dvb < hi_a:
-            x0, x2, y0_, y2 = _pair_terms(srt, i, jj, dvb, dsb)
-            t0 += x0
-            t2 += x2
-            p0 += y0_
-            p2 += y2
-            jj += 1
-    i = a0
-    for j in range(b0, b1):
-        lo_b = srt[j, 0] + dvb
-        hi_b = srt[j, 1] + dvb
-        while i < a1 and srt[i, 0] <= lo_b:
-            i += 1
-        if i == a1:
-            break
-        ii = i
-        while ii < a1 and srt[ii, 0] < hi_b:
-            x0, x2, y0_, y2 = _pair_terms(srt, ii, j, dvb, dsb)
-            t0 += x0
-            t2 += x2
-            p0 += y0_
-            p2 += y2
-            ii += 1
-    return t0 / 6.0, t2, p0 / 6.0, p2
+    counts, acc = work
+    counts[:] = 0
+    acc[:] = 0.0
+    collect_gaps(srt, ranges, shift, bufs, counts, acc)
+    integrate_gaps(bufs, counts, acc)
+    acc[0] /= 6.0
+    acc[2] /= 6.0
+    return counts[2]
 
 
 @jit
@@ -412,6 +329,9 @@ def sweep(
     chains, table, chained = _convex_pairs(convex, pair_a, pair_b, fast)
     low_high = np.zeros((region_start.size - 1, 2), dtype=np.int64)
     scratch = chain_scratch(region_start)  # walk_convex's
+    # _walk_f0_f2's buffers (grown when a direction has more edge pairs) and sums.
+    bufs = scratch_jit(16 * np.diff(region_start).max() + 64)
+    work = (np.zeros(3, dtype=np.int64), np.zeros(4))
     for d in range(half):
         theta = 2.0 * math.pi * d / directions
         c = math.cos(theta)
@@ -444,12 +364,13 @@ def sweep(
                     out[p, 1, d + half] += q2
                 continue
             if fast:
-                t0, t2, q0, q2 = _walk_f0_f2(srt, a0, a1, b0, b1, dvb, ox * c + oy * s)
-                out[p, 0, d] += t0
-                out[p, 1, d] += t2
+                missed = _walk_f0_f2(srt, (a0, a1, b0, b1), (dvb, ox * c + oy * s), bufs, work)
+                bufs = grown(bufs, missed)
+                out[p, 0, d] += work[1][0]
+                out[p, 1, d] += work[1][1]
                 if both:
-                    out[p, 0, d + half] += q0
-                    out[p, 1, d + half] += q2
+                    out[p, 0, d + half] += work[1][2]
+                    out[p, 1, d + half] += work[1][3]
                 continue
             count = _collect(srt, a0, a1, b0, b1, dvb, buf)
             if count < 0:
