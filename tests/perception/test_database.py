@@ -323,7 +323,7 @@ def test_other_schema_version(db_copy: Path) -> None:
     with sqlite3.connect(db_copy) as conn:
         conn.execute("UPDATE meta SET value = '99' WHERE key = 'schema_version'")
     conn.close()
-    with pytest.raises(DatabaseError, match="schema version 99, this scenespeak reads 1 and 2"):
+    with pytest.raises(DatabaseError, match="schema version 99, this scenespeak reads 1, 2 and 3"):
         ObjectDatabase.open(db_copy)
 
 

@@ -166,4 +166,4 @@ def test_colour_signatures_stored_with_masked_views_and_version_1_files_upgraded
     with sqlite3.connect(path) as conn:
         version = conn.execute("SELECT value FROM meta WHERE key = 'schema_version'").fetchone()
     conn.close()
-    assert version == ("2",)
+    assert version == ("3",)

@@ -3,7 +3,7 @@
 The paper matches the scene's keypoints "to a database of known objects ... If a keypoint is
 not matched, it is held as part of an unknown object". Here that database is one SQLite file:
 
-* ``meta``: ``application`` = ``scenespeak-object-database``, ``schema_version`` = ``2`` and a
+* ``meta``: ``application`` = ``scenespeak-object-database``, ``schema_version`` = ``3`` and a
   ``generation`` counter bumped by every write. A file without them is "not a scenespeak object
   database".
 * ``objects``: one row per label (``id``, ``label`` unique, ``added`` as ISO-8601 UTC).
@@ -13,7 +13,8 @@ not matched, it is held as part of an unknown object". Here that database is one
   ``float32`` ``(M, 2)`` BLOB (the largest contour of the mask, or the image border).
 * ``view_colours`` (version 2; a version-1 file is upgraded when opened for writing): per view
   learnt with a mask from a colour image, its colour signature and chromatic-box aspect
-  (:mod:`~scenespeak.perception.recognition.colour`).
+  (:mod:`~scenespeak.perception.recognition.colour`), and (version 3, NULL in older rows) its
+  grey signature and object-box aspect (:mod:`~scenespeak.perception.recognition.grey`).
 
 Every write is one transaction (features are extracted *before* it opens), so an exception or
 Ctrl-C in the middle of :meth:`ObjectDatabase.add_object` leaves the file as it was.

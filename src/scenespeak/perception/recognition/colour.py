@@ -35,12 +35,21 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import cv2
 import numpy as np
 from numpy.typing import NDArray
 
 from scenespeak.perception.objects import ObjectOptions, SceneObject, make_object
+from scenespeak.perception.recognition.grey import (
+    GreyOptions,
+    floor_like,
+    gradient_strength,
+    grey_signature,
+    hellinger,
+    name_by_grey,
+)
 
 __all__ = [
     "BINS",
@@ -108,10 +117,26 @@ class ColourModel:
         Each view's colour signature of the object's pixels (:func:`colour_signature`).
     aspects : (V,) float32
         Each view's height over width of the box round its chromatic object pixels (0: none).
+    greys : (V, GREY_BINS) float32 or None
+        Each view's grey signature (:func:`~scenespeak.perception.recognition.grey.
+        grey_signature`; None: learnt before schema version 3).
+    grey_aspects : (V,) float32 or None
+        Each view's height over width of the box round all its object pixels.
     """
 
     signatures: NDArray[np.float32]
     aspects: NDArray[np.float32]
+    greys: NDArray[np.float32] | None = None
+    grey_aspects: NDArray[np.float32] | None = None
+
+    def is_grey(self, model_chroma: float) -> bool:
+        """Whether less than ``model_chroma`` of the views' pixels are chromatic (on average).
+
+        >>> sig = colour_signature(np.full((4, 3), 128, np.uint8))[None]
+        >>> ColourModel(sig, np.zeros(1, np.float32)).is_grey(0.3)
+        True
+        """
+        return float(_chroma(self.signatures)[1].mean()) < model_chroma
 
 
 def _bins(rgb: NDArray[np.uint8]) -> NDArray[np.intp]:
@@ -183,18 +208,6 @@ def view_colour(
     return colour_signature(rgb), _box_aspect(xy)
 
 
-def hellinger(p: NDArray[np.floating], q: NDArray[np.floating]) -> NDArray[np.float64]:
-    """Hellinger distance between normalised histograms (last axis; broadcasts).
-
-    >>> hellinger(np.array([1.0, 0.0]), np.array([0.0, 1.0])).item()
-    1.0
-    >>> hellinger(np.array([0.5, 0.5]), np.array([0.5, 0.5])).item()
-    0.0
-    """
-    bc = np.sum(np.sqrt(np.asarray(p, np.float64) * np.asarray(q, np.float64)), axis=-1)
-    return np.asarray(np.sqrt(np.clip(1.0 - bc, 0.0, 1.0)))
-
-
 def _chroma(sig: NDArray[np.floating]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """The chromatic parts renormalised (last axis), and their shares."""
     s = np.asarray(sig, np.float64)
@@ -264,6 +277,9 @@ def _object_pixels(
     return rgb, uv.astype(np.float64), idx.astype(np.intp)
 
 
+#: The grey cue's default knobs.
+_GREY = GreyOptions()
+
 #: The points kept for an object named by colour lie in the box round its chromatic pixels
 #: (2–98 %), grown by this share of its size on each side.
 BOX_GROW = 0.1
@@ -283,9 +299,12 @@ def name_unknown_objects(
     models: Mapping[str, ColourModel],
     options: ColourOptions | None = None,
     remake: tuple[NDArray[np.float64], ObjectOptions] | None = None,
+    grey: GreyOptions | None = _GREY,
 ) -> tuple[SceneObject, ...]:
-    """``objects`` with the unknown ones that colour and shape name (:func:`name_by_colour`)
-    renamed, instances numbered ("cup", "cup 2") and the unknown ones left renumbered.
+    """``objects`` with the unknown ones that colour and shape name (:func:`name_by_colour`),
+    or grey levels, texture and shape (:func:`~scenespeak.perception.recognition.grey.
+    name_by_grey`), renamed, instances numbered ("cup", "cup 2") and the unknown ones left
+    renumbered.
 
     Parameters
     ----------
@@ -300,30 +319,27 @@ def name_unknown_objects(
     options : ColourOptions, optional
     remake : (up, ObjectOptions), optional
         With it, a named object is made again (:func:`~scenespeak.perception.objects.
-        make_object`) of only its points inside the box round its chromatic pixels: the dense
-        map smears an object's depth over a plain floor beside it, and those points belong to
-        no object.
+        make_object`) of only its points inside the box round its chromatic pixels (named by
+        colour) or not like the floor (named by grey levels): the dense map smears an
+        object's depth over a plain floor beside it, and those points belong to no object.
+    grey : GreyOptions or None
+        The grey cue's knobs (None: off; models without grey signatures never name by it).
     """
     o = options or ColourOptions()
     img = np.asarray(image)
     if not models or img.ndim != 3 or img.shape[2] < 3 or img.dtype != np.uint8:
         return tuple(objects)
+    scene = _Scene(img[..., :3], np.asarray(camera, np.float64), models, o, grey)
     out = list(objects)
     for i, obj in enumerate(out):
         if not obj.label.startswith("unknown object"):
             continue
-        rgb, uv, idx = _object_pixels(obj, img[..., :3], np.asarray(camera, np.float64))
-        chroma = chromatic_pixels(rgb)
-        if int(chroma.sum()) < o.min_pixels:
-            continue
-        named = name_by_colour(colour_signature(rgb), _box_aspect(uv[chroma]), models, o)
+        named = _name_one(obj, scene)
         if named is None:
             continue
-        label, d1, d2 = named
-        note = f"named by colour and shape (distance {d1:.2f}, next object {d2:.2f})"
+        label, note, keep = named
         base = obj
         if remake is not None:
-            keep = idx[_in_colour_box(uv, chroma)]
             made = make_object(label, obj.xyz[keep], remake[0], source="segment", options=remake[1])
             if isinstance(made, SceneObject):
                 base = made
@@ -331,6 +347,80 @@ def name_unknown_objects(
             base, label=label, name=label, confidence=0.5, notes=(*base.notes, note)
         )
     return tuple(_renumbered(out))
+
+
+@dataclass(eq=False)
+class _Scene:
+    """What naming an unknown object needs: the image, its gray version (made on first use),
+    the camera, the models and the options."""
+
+    rgb: NDArray[np.uint8]
+    camera: NDArray[np.float64]
+    models: Mapping[str, ColourModel]
+    colour: ColourOptions
+    grey: GreyOptions | None
+    _gray: NDArray[np.uint8] | None = None
+
+    def gray(self) -> NDArray[np.uint8]:
+        if self._gray is None:
+            self._gray = np.asarray(cv2.cvtColor(self.rgb, cv2.COLOR_RGB2GRAY), np.uint8)
+        return self._gray
+
+    def grey_models(self, model_chroma: float) -> dict[str, tuple[Any, Any, bool]]:
+        return {
+            lab: (m.greys, m.grey_aspects, m.is_grey(model_chroma))
+            for lab, m in self.models.items()
+            if m.greys is not None and m.grey_aspects is not None and len(m.greys)
+        }
+
+
+def _name_one(obj: SceneObject, scene: _Scene) -> tuple[str, str, NDArray[np.intp]] | None:
+    """The label, note and the points to keep of one unknown object named by colour (first)
+    or by grey levels, or None."""
+    o = scene.colour
+    rgb, uv, idx = _object_pixels(obj, scene.rgb, scene.camera)
+    chroma = chromatic_pixels(rgb)
+    if int(chroma.sum()) >= o.min_pixels:
+        named = name_by_colour(colour_signature(rgb), _box_aspect(uv[chroma]), scene.models, o)
+        if named is not None:
+            label, d1, d2 = named
+            note = f"named by colour and shape (distance {d1:.2f}, next object {d2:.2f})"
+            return label, note, idx[_in_colour_box(uv, chroma)]
+    g = scene.grey
+    if g is None or not len(rgb) or float(chroma.mean()) >= g.min_chroma:
+        return None
+    return _name_grey((uv.astype(np.intp), chroma), idx, scene, g)
+
+
+def _name_grey(
+    pixels: tuple[NDArray[np.intp], NDArray[np.bool_]],
+    idx: NDArray[np.intp],
+    scene: _Scene,
+    g: GreyOptions,
+) -> tuple[str, str, NDArray[np.intp]] | None:
+    """An unknown grey object named by grey levels, texture and shape (its pixels ``uv`` and
+    which are chromatic, its points ``idx``), or None."""
+    uv, chroma = pixels
+    models = scene.grey_models(g.model_chroma)
+    if len(models) < 2:
+        return None
+    gray = scene.gray()
+    lo = np.maximum(uv.min(axis=0) - 1, 0)
+    hi = uv.max(axis=0) + 2
+    strength = gradient_strength(gray[lo[1] : hi[1], lo[0] : hi[0]])[
+        uv[:, 1] - lo[1], uv[:, 0] - lo[0]
+    ]
+    own = ~floor_like(gray, uv, strength, g.floor_tolerance)
+    if int(own.sum()) < g.min_pixels:
+        return None
+    u, s = uv[own], strength[own]
+    sig = grey_signature(gray[u[:, 1], u[:, 0]], s, chroma[own])
+    named = name_by_grey(sig, _box_aspect(u.astype(np.float64)), models, g)
+    if named is None:
+        return None
+    label, d1, d2 = named
+    note = f"named by grey levels, texture and shape (distance {d1:.2f}, next object {d2:.2f})"
+    return label, note, idx[own]
 
 
 def _renumbered(objects: list[SceneObject]) -> list[SceneObject]:

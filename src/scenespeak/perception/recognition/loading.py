@@ -17,6 +17,7 @@ from numpy.typing import NDArray
 
 from scenespeak.errors import DatabaseError
 from scenespeak.perception.recognition.colour import BINS, ColourModel
+from scenespeak.perception.recognition.grey import GREY_BINS
 from scenespeak.perception.recognition.index import (
     _DIM,
     DescriptorIndex,
@@ -128,25 +129,33 @@ def index_of(
 
 
 def read_colour_models(db: ObjectDatabase) -> dict[str, ColourModel]:
-    """Each object's colour signatures and chromatic-box aspects, by label (see
-    :meth:`ObjectDatabase.colour_models`; none in a version-1 file opened read-only)."""
-    rows: list[tuple[Any, ...]] = []
-    tables = db._query("SELECT name FROM sqlite_master WHERE name = 'view_colours'")
-    if tables:  # none in a version-1 file opened read-only
-        rows = db._query(
-            "SELECT o.label, c.signature, c.aspect FROM view_colours c "
-            "JOIN views v ON v.id = c.view_id JOIN objects o ON o.id = v.object_id "
-            "ORDER BY v.id"
-        )
-    by_label: dict[str, tuple[list[NDArray[np.float32]], list[float]]] = {}
-    for label, blob, aspect in rows:
+    """Each object's colour (and, from schema version 3, grey) signatures by label (see
+    :meth:`ObjectDatabase.colour_models`); a file without them (version 1, or 2 for the grey
+    part, opened read-only) gives none. A damaged signature only costs its view's cue."""
+    query = db._query
+    if not query("SELECT name FROM sqlite_master WHERE name = 'view_colours'"):
+        return {}
+    columns = {str(r[1]) for r in query("PRAGMA table_info(view_colours)")}
+    grey = "c.grey, c.grey_aspect" if "grey" in columns else "NULL, NULL"
+    rows = query(
+        f"SELECT o.label, c.signature, c.aspect, {grey} FROM view_colours c "
+        "JOIN views v ON v.id = c.view_id JOIN objects o ON o.id = v.object_id ORDER BY v.id"
+    )
+    by_label: dict[str, list[tuple[NDArray[np.float32], float, Any, Any]]] = {}
+    for label, blob, aspect, grey_blob, grey_aspect in rows:
         sig = np.frombuffer(blob, np.float32)
         if sig.shape != (BINS,) or not np.all(np.isfinite(sig)):
-            continue  # a damaged signature only costs the colour cue
-        sigs, aspects = by_label.setdefault(str(label), ([], []))
-        sigs.append(sig)
-        aspects.append(float(aspect))
-    return {
-        label: ColourModel(np.array(sigs, np.float32), np.array(aspects, np.float32))
-        for label, (sigs, aspects) in by_label.items()
-    }
+            continue
+        by_label.setdefault(str(label), []).append((sig, float(aspect), grey_blob, grey_aspect))
+    return {label: _model(views) for label, views in by_label.items()}
+
+
+def _model(views: list[tuple[NDArray[np.float32], float, Any, Any]]) -> ColourModel:
+    """One object's model; grey signatures only if every view has an intact one."""
+    sigs = np.array([v[0] for v in views], np.float32)
+    aspects = np.array([v[1] for v in views], np.float32)
+    greys = [np.frombuffer(v[2], np.float32) if v[2] is not None else None for v in views]
+    if all(g is not None and g.shape == (GREY_BINS,) and np.all(np.isfinite(g)) for g in greys):
+        grey_aspects = np.array([float(v[3] or 0.0) for v in views], np.float32)
+        return ColourModel(sigs, aspects, np.array(greys, np.float32), grey_aspects)
+    return ColourModel(sigs, aspects)

@@ -20,10 +20,11 @@ __all__ = ["APPLICATION", "APPLICATION_ID", "READABLE_VERSIONS", "SCHEMA_VERSION
 
 
 APPLICATION = "scenespeak-object-database"
-SCHEMA_VERSION = 2
-#: Versions this scenespeak reads: 1 (no colour signatures) is upgraded in place when opened
-#: for writing (:func:`migrate`), and read as it is when opened read-only.
-READABLE_VERSIONS = ("1", "2")
+SCHEMA_VERSION = 3
+#: Versions this scenespeak reads: 1 (no colour signatures) and 2 (no grey signatures) are
+#: upgraded in place when opened for writing (:func:`migrate`), and read as they are when
+#: opened read-only.
+READABLE_VERSIONS = ("1", "2", "3")
 #: SQLite ``PRAGMA application_id`` of our files ("SCSK").
 APPLICATION_ID = 0x5343534B
 _SQLITE_MAGIC = b"SQLite format 3\x00"
@@ -51,7 +52,9 @@ CREATE INDEX views_object ON views(object_id);
 CREATE TABLE view_colours (
     view_id INTEGER PRIMARY KEY REFERENCES views(id) ON DELETE CASCADE,
     signature BLOB NOT NULL,
-    aspect REAL NOT NULL
+    aspect REAL NOT NULL,
+    grey BLOB,
+    grey_aspect REAL
 );
 CREATE TABLE index_cache (
     kind TEXT PRIMARY KEY,
@@ -90,7 +93,8 @@ def _check_schema(path: Path, conn: sqlite3.Connection) -> None:
         raise DatabaseError(
             path,
             f"{not_ours} of this version (schema version {version}, this scenespeak reads "
-            f"{' and '.join(READABLE_VERSIONS)}); rebuild it with `scenespeak db add`",
+            f"{', '.join(READABLE_VERSIONS[:-1])} and {READABLE_VERSIONS[-1]}); rebuild it with "
+            "`scenespeak db add`",
         )
     missing = {"objects", "views"} - tables
     if missing:
@@ -105,21 +109,32 @@ def _check_schema(path: Path, conn: sqlite3.Connection) -> None:
 
 #: Schema version 2's addition: each training view's colour signature and chromatic-box aspect
 #: (:mod:`~scenespeak.perception.recognition.colour`); views learnt before have no row.
+#: Version 3 adds the columns ``grey`` and ``grey_aspect``: its grey signature and object-box
+#: aspect (:mod:`~scenespeak.perception.recognition.grey`; NULL for views learnt before).
 _COLOUR_TABLE = _SCHEMA[_SCHEMA.index("CREATE TABLE view_colours") :].split(";")[0]
+_GREY_COLUMNS = (
+    "ALTER TABLE view_colours ADD COLUMN grey BLOB",
+    "ALTER TABLE view_colours ADD COLUMN grey_aspect REAL",
+)
 
 
 def migrate(conn: sqlite3.Connection) -> None:
-    """Upgrade a version-1 file to this version in one transaction (a no-op when current).
+    """Upgrade a version-1 or -2 file to this version in one transaction (a no-op when current).
 
-    Version 2 adds the ``view_colours`` table; the views learnt before keep no colour
-    signature (they are still found by their descriptors; ``db add --replace`` adds one).
+    Version 2 adds the ``view_colours`` table, version 3 its grey columns; the views learnt
+    before keep no colour or grey signature (they are still found by their descriptors;
+    ``db add --replace`` adds them).
     """
     row = conn.execute("SELECT value FROM meta WHERE key = 'schema_version'").fetchone()
     if row is None or row[0] == str(SCHEMA_VERSION):
         return
     conn.execute("BEGIN IMMEDIATE")
     try:
-        conn.execute(_COLOUR_TABLE)
+        if row[0] == "1":
+            conn.execute(_COLOUR_TABLE)
+        else:
+            for stmt in _GREY_COLUMNS:
+                conn.execute(stmt)
         conn.execute(
             "UPDATE meta SET value = ? WHERE key = 'schema_version'", (str(SCHEMA_VERSION),)
         )

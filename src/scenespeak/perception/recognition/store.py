@@ -590,8 +590,14 @@ def _insert_view(conn: sqlite3.Connection, oid: int, v: _ViewData) -> None:
     )
     if v.colour is not None:
         sig, aspect = v.colour
+        grey = None if v.grey is None else np.ascontiguousarray(v.grey[0], np.float32).tobytes()
         conn.execute(
-            "INSERT INTO view_colours(view_id, signature, aspect) "
-            "VALUES (last_insert_rowid(), ?, ?)",
-            (np.ascontiguousarray(sig, np.float32).tobytes(), float(aspect)),
+            "INSERT INTO view_colours(view_id, signature, aspect, grey, grey_aspect) "
+            "VALUES (last_insert_rowid(), ?, ?, ?, ?)",
+            (
+                np.ascontiguousarray(sig, np.float32).tobytes(),
+                float(aspect),
+                grey,
+                None if v.grey is None else float(v.grey[1]),
+            ),
         )

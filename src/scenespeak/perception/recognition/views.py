@@ -12,7 +12,8 @@ from numpy.typing import NDArray
 
 from scenespeak.errors import ImageError
 from scenespeak.perception.features import Features, as_mask, detect, load_image, to_gray
-from scenespeak.perception.recognition.colour import view_colour
+from scenespeak.perception.recognition.colour import chromatic_pixels, view_colour
+from scenespeak.perception.recognition.grey import view_grey
 
 __all__ = ["ImageLike", "MaskLike", "outline_from_mask"]
 
@@ -83,6 +84,8 @@ class _ViewData:
     outline: NDArray[np.float32]
     #: the colour signature and chromatic-box aspect inside the mask (None: no mask, or gray)
     colour: tuple[NDArray[np.float32], float] | None = None
+    #: the grey signature and object-box aspect inside the mask (None: no colour signature)
+    grey: tuple[NDArray[np.float32], float] | None = None
 
 
 def _source_name(item: object, i: int, kind: str) -> str:
@@ -100,14 +103,22 @@ def _read_image(item: ImageLike, i: int) -> NDArray[np.uint8]:
         raise ImageError(_source_name(item, i, "image"), exc.problem) from None
 
 
+_Signature = tuple[NDArray[np.float32], float]
+
+
 def _colour_of(
-    item: ImageLike, mask: NDArray[np.bool_]
-) -> tuple[NDArray[np.float32], float] | None:
-    """The colour signature inside ``mask`` of an RGB image (a file read again in colour)."""
+    item: ImageLike, mask: NDArray[np.bool_], gray: NDArray[np.uint8]
+) -> tuple[_Signature, _Signature] | None:
+    """The colour signature inside ``mask`` of an RGB image (a file read again in colour),
+    and the grey signature of ``gray`` (the image as learnt) there."""
     image = load_image(item, gray=False) if isinstance(item, str | PathLike) else np.asarray(item)
     if image.ndim != 3 or image.shape[:2] != mask.shape:
         return None
-    return view_colour(image, mask)
+    colour = view_colour(image, mask)
+    if colour is None:
+        return None
+    rows, cols = np.nonzero(mask)
+    return colour, view_grey(gray, mask, chromatic_pixels(image[rows, cols, :3]))
 
 
 def _read_mask(item: MaskLike, i: int, shape: tuple[int, ...]) -> NDArray[np.bool_] | None:
@@ -155,5 +166,6 @@ def _extract_view(
             + "; use a sharper, more textured or larger image of the object",
         )
     outline = outline_from_mask(m) if m is not None else _border_outline(w, h)
-    colour = _colour_of(image, m) if m is not None else None
-    return _ViewData(source, w, h, m is not None, feats, outline, colour)
+    cues = _colour_of(image, m, gray) if m is not None else None
+    colour, grey = (None, None) if cues is None else cues
+    return _ViewData(source, w, h, m is not None, feats, outline, colour, grey)
