@@ -147,6 +147,21 @@ def test_an_unknown_grey_segment_is_named_without_the_floor_beside_it() -> None:
     assert name_unknown([seg], flat, K, MODELS)[0].label == "unknown object 1"
 
 
+def test_a_piece_of_an_object_already_found_is_not_a_second_instance() -> None:
+    image = _scene()
+    seg = _patch_object((100, 60, 140, 112), 1.0)
+
+    def soup_at(x0: int, x1: int) -> SceneObject:
+        return dataclasses.replace(_patch_object((x0, 60, x1, 112), 1.0), label="soup", name="soup")
+
+    # SIFT found "soup" right beside the segment (its other half): the segment stays unknown
+    near = name_unknown([soup_at(141, 160), seg], image, K, MODELS)
+    assert [o.name for o in near] == ["soup", "unknown object 1"]
+    # a soup 20 cm away is another instance: the segment is "soup 2"
+    far = name_unknown([soup_at(240, 260), seg], image, K, MODELS)
+    assert [o.name for o in far] == ["soup", "soup 2"]
+
+
 def _sha(path: Path) -> str:
     return hashlib.sha1(path.read_bytes()).hexdigest()
 

@@ -40,6 +40,7 @@ from typing import Any
 import cv2
 import numpy as np
 from numpy.typing import NDArray
+from scipy.spatial import cKDTree
 
 from scenespeak.perception.objects import ObjectOptions, SceneObject, make_object
 from scenespeak.perception.recognition.grey import (
@@ -279,6 +280,26 @@ def _object_pixels(
 
 #: The grey cue's default knobs.
 _GREY = GreyOptions()
+_GREY_NOTE = "named by grey levels, texture and shape"
+#: An unknown object whose footprint comes this near (metres) an object already labelled
+#: ``L`` is not named ``L`` by grey levels: it is a piece of that object that its detection did
+#: not cover (on the default set, a grey shoebox's side 1.2 cm from its detected front was
+#: named "shoebox 2"), not a second instance.
+PIECE_GAP = 0.05
+
+
+def _piece_of(obj: SceneObject, label: str, objects: Sequence[SceneObject]) -> bool:
+    """Whether ``obj``'s footprint points come within :data:`PIECE_GAP` of those of an object
+    labelled ``label`` among ``objects``."""
+    mine = np.asarray(obj.plane_xy, np.float64)
+    for other in objects:
+        if other is obj or other.label != label or not len(other.plane_xy) or not len(mine):
+            continue
+        gap, _ = cKDTree(np.asarray(other.plane_xy, np.float64)).query(mine, k=1)
+        if float(np.min(gap)) < PIECE_GAP:
+            return True
+    return False
+
 
 #: The points kept for an object named by colour lie in the box round its chromatic pixels
 #: (2–98 %), grown by this share of its size on each side.
@@ -335,7 +356,7 @@ def name_unknown_objects(
         if not obj.label.startswith("unknown object"):
             continue
         named = _name_one(obj, scene)
-        if named is None:
+        if named is None or (named[1].startswith(_GREY_NOTE) and _piece_of(obj, named[0], out)):
             continue
         label, note, keep = named
         base = obj
@@ -419,7 +440,7 @@ def _name_grey(
     if named is None:
         return None
     label, d1, d2 = named
-    note = f"named by grey levels, texture and shape (distance {d1:.2f}, next object {d2:.2f})"
+    note = f"{_GREY_NOTE} (distance {d1:.2f}, next object {d2:.2f})"
     return label, note, idx[own]
 
 
