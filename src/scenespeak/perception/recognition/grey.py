@@ -177,8 +177,9 @@ def view_grey(
     (3, 2.0)
     """
     img = np.asarray(image)
-    gray = cv2.cvtColor(img[..., :3], cv2.COLOR_RGB2GRAY) if img.ndim == 3 else img
-    gray = np.asarray(gray, np.uint8)
+    gray: NDArray[np.uint8] = np.asarray(
+        cv2.cvtColor(img[..., :3], cv2.COLOR_RGB2GRAY) if img.ndim == 3 else img, np.uint8
+    )
     rows, cols = np.nonzero(np.asarray(mask, bool))
     sig = grey_signature(gray[rows, cols], gradient_strength(gray)[rows, cols], chromatic)
     return sig, _box_aspect(rows, cols)

@@ -118,7 +118,8 @@ def _colour_of(
     if colour is None:
         return None
     rows, cols = np.nonzero(mask)
-    return colour, view_grey(gray, mask, chromatic_pixels(image[rows, cols, :3]))
+    rgb: NDArray[np.uint8] = np.asarray(image[rows, cols, :3], np.uint8)
+    return colour, view_grey(gray, mask, chromatic_pixels(rgb))
 
 
 def _read_mask(item: MaskLike, i: int, shape: tuple[int, ...]) -> NDArray[np.bool_] | None:
