@@ -588,16 +588,10 @@ def _insert_view(conn: sqlite3.Connection, oid: int, v: _ViewData) -> None:
             np.ascontiguousarray(v.outline, np.float32).tobytes(),
         ),
     )
-    if v.colour is not None:
-        sig, aspect = v.colour
-        grey = None if v.grey is None else np.ascontiguousarray(v.grey[0], np.float32).tobytes()
+    row = v.colour_row()
+    if row is not None:
         conn.execute(
             "INSERT INTO view_colours(view_id, signature, aspect, grey, grey_aspect) "
             "VALUES (last_insert_rowid(), ?, ?, ?, ?)",
-            (
-                np.ascontiguousarray(sig, np.float32).tobytes(),
-                float(aspect),
-                grey,
-                None if v.grey is None else float(v.grey[1]),
-            ),
+            row,
         )

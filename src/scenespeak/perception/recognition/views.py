@@ -87,6 +87,17 @@ class _ViewData:
     #: the grey signature and object-box aspect inside the mask (None: no colour signature)
     grey: tuple[NDArray[np.float32], float] | None = None
 
+    def colour_row(self) -> tuple[bytes, float, bytes | None, float | None] | None:
+        """The view's ``view_colours`` row after its id: colour signature, aspect, grey
+        signature, grey aspect (None: no colour signature, no row)."""
+        if self.colour is None:
+            return None
+        sig = np.ascontiguousarray(self.colour[0], np.float32).tobytes()
+        if self.grey is None:
+            return sig, float(self.colour[1]), None, None
+        grey = np.ascontiguousarray(self.grey[0], np.float32).tobytes()
+        return sig, float(self.colour[1]), grey, float(self.grey[1])
+
 
 def _source_name(item: object, i: int, kind: str) -> str:
     if isinstance(item, str | PathLike):
