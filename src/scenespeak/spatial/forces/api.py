@@ -151,7 +151,10 @@ def _direct(
     """:func:`force_histograms` of two float64 polygons in one compiled call
     (:mod:`~scenespeak.spatial.forces._direct`), or None when the general path must run: other
     input, the NumPy reference (``_jit``), or anything to report or handle."""
-    if not (_float_polygon(argument) and _float_polygon(referent)):
+    from scenespeak import limits
+
+    most = limits.current().max_vertices
+    if not (_float_polygon(argument, most) and _float_polygon(referent, most)):
         return None
     if mask_tolerance is not None and not _plain_tolerance(mask_tolerance):
         return None
@@ -170,16 +173,14 @@ def _direct(
     return out if status == 0 else None
 
 
-def _float_polygon(obj: object) -> TypeGuard[FloatArray]:
-    """An ``(N, 2)`` float64 array within ``max_vertices`` (what the direct path takes)."""
-    from scenespeak import limits
-
+def _float_polygon(obj: object, most: int) -> TypeGuard[FloatArray]:
+    """An ``(N, 2)`` float64 array of at most ``most`` vertices (what the direct path takes)."""
     return (
         isinstance(obj, np.ndarray)
         and obj.dtype == np.float64
         and obj.ndim == 2
         and obj.shape[1] == 2
-        and len(obj) <= limits.current().max_vertices
+        and len(obj) <= most
     )
 
 
@@ -230,7 +231,8 @@ def force_histograms(
     (1, 1)
     """
     directions = _check_directions(directions)
-    exponents = [_check_r(x) for x in np.atleast_1d(np.asarray(r, dtype=object))]
+    items = r if isinstance(r, tuple | list) else np.atleast_1d(np.asarray(r, dtype=object))
+    exponents = [_check_r(x) for x in items]
     if not exponents:
         raise InputError("r", "give at least one exponent")
     direct = _direct(argument, referent, exponents, directions, mask_tolerance)

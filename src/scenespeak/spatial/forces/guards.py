@@ -36,6 +36,8 @@ def check_directions(directions: object) -> int:
 
 def check_r(r: object) -> float:
     """A real exponent with ``|r| <= 20``."""
+    if type(r) is float and -_MAX_R <= r <= _MAX_R:  # the common case, first (NaN fails it)
+        return r
     if isinstance(r, bool) or not isinstance(r, int | float | np.integer | np.floating):
         raise InputError("r", f"must be a real number, got {r!r}")
     value = float(r)
