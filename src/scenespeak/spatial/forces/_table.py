@@ -33,17 +33,13 @@ def _edge_row(
     s1 = pts[f, 0] * c + pts[f, 1] * s
     v1 = pts[f, 1] * c - pts[f, 0] * s
     dv = v1 - v0
-    if dv < 0.0:
-        out[j, 0] = v1
-        out[j, 1] = v0
-        out[j, 2] = s1
-        out[j, 4] = -1.0
-    else:
-        out[j, 0] = v0
-        out[j, 1] = v1
-        out[j, 2] = s0
-        out[j, 4] = 1.0 if dv > 0.0 else 0.0
-    out[j, 3] = (s1 - s0) / dv if dv != 0.0 else 0.0
+    down = dv < 0.0  # selects, not branches: an outline's edges go up and down at random
+    out[j, 0] = v1 if down else v0
+    out[j, 1] = v0 if down else v1
+    out[j, 2] = s1 if down else s0
+    out[j, 4] = -1.0 if down else (1.0 if dv > 0.0 else 0.0)
+    k = (s1 - s0) / dv
+    out[j, 3] = k if dv != 0.0 else 0.0
     return v0
 
 
