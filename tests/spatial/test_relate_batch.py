@@ -416,6 +416,38 @@ def test_compiled_coverages_match_the_rules(seed: int, nbins: int) -> None:
         assert batch._compiled_counts() is None
 
 
+@settings(max_examples=40, deadline=None)
+@given(seeds, st.sampled_from([8, 12, 36, 180, 360, 512]))
+def test_compiled_cancellation_is_bit_identical(seed: int, nbins: int) -> None:
+    """The compiled cancellation (used where Numba is loaded) gives the NumPy path's floats,
+    bit for bit: the cancelled masses, the favourable forces left, and so the degrees."""
+    from scenespeak.spatial import degrees as deg
+    from scenespeak.spatial.forces import _jit
+
+    rng = np.random.default_rng(seed)
+    h = _sparse_histograms(rng, int(rng.integers(1, 40)), nbins)
+    n = nbins // 4
+    fav = rng.choice([0.0, 0.5, 1.0], size=(2 * len(h), n)) * rng.uniform(0, 2, (2 * len(h), n))
+    moment = rng.choice([0.0, -1.0, 1.0, 3.0], size=2 * len(h)) * rng.uniform(0, n, 2 * len(h))
+    moment[0] = float(np.cumsum(fav[0] * deg._constants(nbins).dist)[n // 2])  # an exact bin
+    dist = deg._constants(nbins).dist
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv("SCENESPEAK_NUMBA", "never")
+        assert deg._compiled_cancel() is None
+        want_fav = fav.copy()
+        want = deg._cancelled(want_fav, moment, dist)
+        want_deg = deg.four_direction_degrees(h)
+        mp.setenv("SCENESPEAK_NUMBA", "always")
+        if not _jit.available() or _jit._numba() is None:
+            pytest.skip("Numba is not installed")
+        assert deg._compiled_cancel() is not None
+        got_fav = fav.copy()
+        got = deg._cancelled(got_fav, moment, dist)
+        got_deg = deg.four_direction_degrees(h)
+    assert got.tobytes() == want.tobytes() and got_fav.tobytes() == want_fav.tobytes()
+    assert all(a.tobytes() == b.tobytes() for a, b in zip(got_deg, want_deg, strict=True))
+
+
 # Degrees drawn from the thresholds themselves and their neighbours, so that every comparison
 # of the rule base meets equality and ties.
 _EDGES = sorted(

@@ -29,6 +29,7 @@ shrinks by the factor ``1 - tau / f`` (about 3 % for 180 bins), so a spike would
 from __future__ import annotations
 
 import functools
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -388,6 +389,9 @@ def _cancelled(
 ) -> NDArray[np.float64]:
     """:func:`_cancel_side` of every row of ``fav`` (in place) with its ``moment``: the
     cancelled mass of each row (rows without a moment cancel nothing, 0.0)."""
+    kernel = _compiled_cancel()
+    if kernel is not None and fav.flags.c_contiguous:
+        return kernel(fav, np.ascontiguousarray(moment), np.ascontiguousarray(dist))
     cancelled = np.zeros(len(fav))
     rows = np.flatnonzero(moment > 0.0)
     if rows.size == 0:
@@ -409,6 +413,69 @@ def _cancelled(
     fav[rows] = side
     cancelled[rows] = done
     return cancelled
+
+
+def _cancel_rows(
+    fav: NDArray[np.float64], moment: NDArray[np.float64], dist: NDArray[np.float64]
+) -> NDArray[np.float64]:
+    """:func:`_cancelled` in plain loops for Numba (:func:`_compiled_cancel`): the same
+    operations in the same order on each row, so the same floats (the cumulative cost
+    from the pivot inwards, the count of bins it does not pass, the consumed bins' sum in
+    :func:`_prefix_sums`' order, the partial bin)."""
+    rows, n = fav.shape
+    out = np.zeros(rows)
+    cum = np.empty(n)
+    acc = np.empty(8)
+    for r in range(rows):
+        m = moment[r]
+        if not m > 0.0:
+            continue
+        run = 0.0
+        full = 0
+        for j in range(n):
+            run += fav[r, j] * dist[j]
+            cum[j] = run
+            if run <= m:
+                full += 1
+        blocks = full // 8
+        done = 0.0
+        if blocks > 0:
+            for j in range(8):
+                acc[j] = fav[r, j]
+            for b in range(1, blocks):
+                for j in range(8):
+                    acc[j] += fav[r, 8 * b + j]
+            done = ((acc[0] + acc[1]) + (acc[2] + acc[3])) + ((acc[4] + acc[5]) + (acc[6] + acc[7]))
+        for i in range(7):
+            col = 8 * blocks + i
+            done += fav[r, col] if col < full else 0.0
+        for j in range(full):
+            fav[r, j] = 0.0
+        at = min(full, n - 1)
+        left = m - (cum[full - 1] if full > 0 else 0.0)
+        if full < n and left > 0.0 and dist[at] > 0.0:
+            part = min(fav[r, at], left / dist[at])
+            fav[r, at] -= part
+            done += part
+        out[r] = done
+    return out
+
+
+_CANCEL: list[object] = []
+
+
+def _compiled_cancel() -> Callable[..., NDArray[np.float64]] | None:
+    """:func:`_cancel_rows` compiled, when Numba is loaded in this process already (by the
+    force sweep; never loaded for this alone), else None. Bit for bit the NumPy path's floats
+    (pinned by ``test_compiled_cancellation_is_bit_identical``), so the choice never changes a
+    result."""
+    from scenespeak.spatial.forces import _jit
+
+    if not _jit.loaded():
+        return None
+    if not _CANCEL:
+        _CANCEL.append(_jit.jit(_cancel_rows))
+    return _CANCEL[0]  # type: ignore[return-value]
 
 
 def _turned_degrees(g: NDArray[np.float64]) -> NDArray[np.float64]:
