@@ -424,7 +424,7 @@ def _cancel_rows(
     :func:`_prefix_sums`' order, the partial bin)."""
     rows, n = fav.shape
     out = np.zeros(rows)
-    cum = np.empty(n)
+    cum = np.zeros(n + 1)  # cum[j + 1]: the cost of bins 0..j; cum[0] = 0.0
     acc = np.empty(8)
     for r in range(rows):
         m = moment[r]
@@ -434,7 +434,7 @@ def _cancel_rows(
         full = 0
         for j in range(n):
             run += fav[r, j] * dist[j]
-            cum[j] = run
+            cum[j + 1] = run
             if run <= m:
                 full += 1
         blocks = full // 8
@@ -452,7 +452,7 @@ def _cancel_rows(
         for j in range(full):
             fav[r, j] = 0.0
         at = min(full, n - 1)
-        left = m - (cum[full - 1] if full > 0 else 0.0)
+        left = m - cum[full]
         if full < n and left > 0.0 and dist[at] > 0.0:
             part = min(fav[r, at], left / dist[at])
             fav[r, at] -= part
