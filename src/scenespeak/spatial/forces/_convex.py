@@ -9,8 +9,10 @@ two convex regions whose ranges of lines overlap are exactly the intervals of th
 breakpoints of one chain of A and one chain of B, four chain pairs in all. No table is sorted
 (the chains are sorted by construction), and consecutive intervals share a breakpoint, so the
 gap ``d`` and ``Ψ(|d|)`` at each breakpoint are computed once: one logarithm per edge pair
-instead of two. The terms are those of :func:`~scenespeak.spatial.forces._sweep._f0_f2_terms`
-(Matsakis & Wendling 1999; ``docs/forces.md``), the sums the same up to rounding.
+instead of two. The terms are the general sweep's (``_sweep``, ``_batch``; Matsakis & Wendling
+1999; ``docs/forces.md``), the sums the same up to rounding. Each merge runs in three passes
+(:func:`chain_pair`): the merge alone, then the logarithms and the interval terms in loops the
+compiler vectorises, then the sums in interval order.
 
 The breakpoints of a chain are its vertices' ``v``, made non-decreasing by a running maximum:
 rounding can put two nearly level vertices one ulp out of order, which would otherwise give an
@@ -281,7 +283,7 @@ def _crossing(
 @jit_inline
 def _terms(buf: np.ndarray, n: int, sign: float) -> None:
     """Each interval's ``6 F0(θ), F2(θ), 6 F0(θ + π), F2(θ + π)`` into ``buf[TERMS:TERMS + 4,
-    q]`` (:func:`_sweep._f0_f2_terms`; Matsakis & Wendling 1999) from the gaps ``buf[GAP]``,
+    q]`` (the general sweep's F0 + F2 terms; Matsakis & Wendling 1999) from the gaps ``buf[GAP]``,
     the widths ``buf[WIDTH]`` and ``log |gap|`` in ``buf[LOG]``, with selects instead of
     branches so that the loop is vectorised. ``sign``: the product of the chains' signs.
 
