@@ -23,7 +23,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from scenespeak.description import SceneDescription
-from scenespeak.perception import stereo
+from scenespeak.perception import plausibility, stereo
 from scenespeak.perception.features import Features
 from scenespeak.perception.scene_objects import StrategyOptions, geometry_for
 from scenespeak.perception.scene_regions import SceneGeometry
@@ -138,6 +138,10 @@ def stereo_stage(
     left, right, rig = pair
     feats_r = future_r.result()
     with timed(timings, "stereo"):
+        if opts[0].check_order:  # on these features: no SIFT of its own (issue 16)
+            plausibility.check_pair_order(
+                left, right, rig, names=names, features=(feats_l, feats_r)
+            )
         result = stereo.stereo_points(
             left,
             right,

@@ -222,3 +222,55 @@ def test_the_pair_checks_come_first(
     assert main(["points", "--calib", str(calib), str(first), str(second)]) == 2
     err = capsys.readouterr().err.strip()
     assert len(err.splitlines()) == 1 and re.search(message, err), err
+
+
+@pytest.mark.parametrize(
+    ("case", "message"),
+    [
+        ("swapped", r"calib\.json: .*negative disparity.*look swapped"),
+        ("left twice", r"shows the same view as"),
+        ("noise", r"the two images do not show the same scene"),
+    ],
+)
+def test_describe_refuses_the_same_pairs_on_its_stages_features(
+    case: str, message: str, tmp_path: Path, capsys: pytest.CaptureFixture[str], card_db: Path
+) -> None:
+    """``describe`` runs the pair-order check inside the stereo stage on that stage's SIFT
+    features (``StereoOptions.check_order``; it used to run SIFT on both images once more):
+    the pairs ``points`` refuses, it refuses with the same one line, exit 2."""
+    import re
+
+    left, right = card_pair(CARDS)
+    if case == "noise":
+        right = np.random.default_rng(1).integers(0, 255, right.shape, dtype=np.uint8)
+    lp, rp, calib, _ = _write_pair(left, right, (W, H), tmp_path)
+    first, second = {"swapped": (rp, lp), "left twice": (lp, lp), "noise": (lp, rp)}[case]
+    argv = ["describe", "--calib", str(calib), "--db", str(card_db), str(first), str(second)]
+    assert main(argv) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and re.search(message, err), err
+
+
+def test_describe_with_the_check_in_the_stage_describes_a_good_pair(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], card_db: Path
+) -> None:
+    """The check in the stage passes a good pair, and what ``describe --json`` prints is
+    ``describe_scene`` without the check (the check decides only whether to go on)."""
+    lp, rp, calib, rig = _write_pair(*card_pair(CARDS), (W, H), tmp_path)
+    argv = [
+        "describe",
+        "--calib",
+        str(calib),
+        "--db",
+        str(card_db),
+        str(lp),
+        str(rp),
+        "--format",
+        "json",
+    ]
+    assert main(argv) == 0
+    got = json.loads(capsys.readouterr().out)
+    with ObjectDatabase.open(card_db, readonly=True) as db:
+        ref = describe_scene(load_image(lp, gray=False), load_image(rp, gray=False), rig, db)
+    assert got["objects"] == ref.to_dict()["objects"]
+    assert got["relations"] == ref.to_dict()["relations"]

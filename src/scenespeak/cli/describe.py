@@ -281,16 +281,21 @@ def _describe(left: Path, right: Path, rig: Any, db: Path, **options: Any) -> An
     from scenespeak.perception import dbfiles, plausibility
     from scenespeak.perception.features import load_image
     from scenespeak.perception.recognition import ObjectDatabase
+    from scenespeak.perception.stage_options import StereoOptions
     from scenespeak.pipeline import describe_scene
 
     left_img = load_image(left, gray=False)
     right_img = load_image(right, gray=False)
-    plausibility.check_pair_order(left_img, right_img, rig, names=(str(left), str(right)))
     sources = {"left": str(left), "right": str(right), "calib": rig.source, "db": str(db)}
     dbfiles.check_file(db)
     dbfiles.validate(db)
+    # the stereo stage refuses a swapped or unrelated pair first, on its own SIFT features
+    # (check_order; before session 6 the check ran SIFT on both images once more here)
+    stereo_options = StereoOptions(check_order=True)
     with ObjectDatabase.open(db, readonly=True) as database:
-        description = describe_scene(left_img, right_img, rig, database, sources=sources, **options)
+        description = describe_scene(
+            left_img, right_img, rig, database, sources=sources, stereo=stereo_options, **options
+        )
     z = np.array([o["centroid"][2] for o in description.to_dict()["objects"] if o.get("centroid")])
     if len(z):
         fx = float(rig.K_left[0, 0])

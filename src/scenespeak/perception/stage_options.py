@@ -46,6 +46,11 @@ class StereoOptions:
         the objects are recognised).
     dense_margin : int
         :data:`DENSE_MARGIN` — pixels around the matches' box for ``dense_crop``.
+    check_order : bool
+        False — first refuse a pair that is swapped, unrelated or not fitted by the calibration
+        (:func:`scenespeak.perception.plausibility.check_pair_order`) on the stage's own SIFT
+        features, so that the check costs no SIFT of its own (``scenespeak describe`` sets it).
+        Not one of :meth:`keywords`: the check runs before ``stereo_points``.
 
     Examples
     --------
@@ -56,6 +61,7 @@ class StereoOptions:
     ratio: float = 0.6
     dense_crop: bool = True
     dense_margin: int = DENSE_MARGIN
+    check_order: bool = False
 
     def keywords(self) -> StereoKeywords:
         """The keywords of ``stereo_points`` these options set."""
