@@ -29,9 +29,9 @@ def occluded(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
     """The rendered scene described by the whole chain, with what the region stage read."""
     scenes = pytest.importorskip("scenespeak.tools.scenes")
     from scenespeak.perception.calibration import load_rig
-    from scenespeak.perception.features import load_image
     from scenespeak.perception.recognition import ObjectDatabase
-    from scenespeak.pipeline import database_from_dataset, describe_scene
+    from scenespeak.pipeline import database_from_dataset
+    from scenespeak.scene_folder import describe_scene_folder
     from scenespeak.tools.scene_model import CATALOGUE, Placement
 
     root = tmp_path_factory.mktemp("occluded")
@@ -47,10 +47,8 @@ def occluded(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
         )
     database_from_dataset(root, root / "objects.db")
     rig = load_rig(scene / "calib.json")
-    left = load_image(scene / "left.png", gray=False)
-    right = load_image(scene / "right.png", gray=False)
     with ObjectDatabase.open(root / "objects.db", readonly=True) as db:
-        desc = describe_scene(left, right, rig, db)
+        desc = describe_scene_folder(scene, db)  # the pipeline on the folder's files
         ids = {o.id: o.label for o in db.list_objects()}
     truth = {o["label"]: np.asarray(o["centroid"]) for o in _truth(scene)["objects"]}
     return {"desc": desc, "rig": rig, "ids": ids, "truth": truth}
