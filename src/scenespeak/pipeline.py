@@ -41,7 +41,7 @@ fields); :meth:`SceneDescription.to_text` the sentences for people.
 from __future__ import annotations
 
 import time
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Collection, Mapping
 from concurrent.futures import Executor, Future, ThreadPoolExecutor
 from dataclasses import dataclass, field, replace
 from functools import partial
@@ -77,6 +77,7 @@ __all__ = [
     "StereoOptions",
     "StrategyOptions",
     "database_from_dataset",
+    "dataset_labels",
     "describe_files",
     "describe_scene",
 ]
@@ -508,13 +509,40 @@ def describe_files(
         return describe_scene(left, right, rig, db, sources=sources, progress=progress, **options)
 
 
+def _training_views(folder: Path) -> list[Path]:
+    return sorted(v for v in folder.glob("view_*.png") if not v.stem.endswith("_mask"))
+
+
+def _object_folders(dataset: str | PathLike[str]) -> list[Path]:
+    root = Path(dataset) / "objects"
+    if not root.is_dir():
+        raise InputError(root, "no training views here (expected objects/<label>/view_NN.png)")
+    return sorted(p for p in root.iterdir() if p.is_dir() and _training_views(p))
+
+
+def dataset_labels(dataset: str | PathLike[str]) -> list[str]:
+    """The labels a generated dataset has training views of (``objects/<label>/``), sorted.
+
+    Raises
+    ------
+    InputError
+        If the dataset has no ``objects`` folder.
+    """
+    return [p.name for p in _object_folders(dataset)]
+
+
 def database_from_dataset(
-    dataset: str | PathLike[str], db_path: str | PathLike[str], *, replace: bool = True
+    dataset: str | PathLike[str],
+    db_path: str | PathLike[str],
+    *,
+    replace: bool = True,
+    labels: Collection[str] | None = None,
 ) -> list[str]:
     """Learn every object of a generated dataset into a database file (created if missing).
 
     Reads ``DATASET/objects/<label>/view_NN.png`` with their ``view_NN_mask.png`` (the folder
-    format of ``docs/scenes.md``). Returns the labels learnt.
+    format of ``docs/scenes.md``); ``labels``: learn only these (leave-part-out evaluation).
+    Returns the labels learnt.
 
     Raises
     ------
@@ -523,22 +551,20 @@ def database_from_dataset(
     """
     from scenespeak.perception.recognition import ObjectDatabase
 
-    root = Path(dataset) / "objects"
-    if not root.is_dir():
-        raise InputError(root, "no training views here (expected objects/<label>/view_NN.png)")
-    labels: list[str] = []
+    learnt: list[str] = []
+    folders = _object_folders(dataset)
     with ObjectDatabase.open(db_path, create=True) as database:
-        for folder in sorted(p for p in root.iterdir() if p.is_dir()):
-            views = sorted(v for v in folder.glob("view_*.png") if not v.stem.endswith("_mask"))
-            if not views:
+        for folder in folders:
+            if labels is not None and folder.name not in labels:
                 continue
+            views = _training_views(folder)
             masks = [v.with_name(v.stem + "_mask.png") for v in views]
             use_masks: Any = masks if all(m.exists() for m in masks) else None
             if use_masks is None:
                 use_masks = [_auto_mask(v) for v in views]
             database.add_object(folder.name, views, masks=use_masks, replace=replace)
-            labels.append(folder.name)
-    return labels
+            learnt.append(folder.name)
+    return learnt
 
 
 def _auto_mask(path: Path) -> Any:

@@ -33,10 +33,39 @@ def evaluate_cmd(
     db: Annotated[
         Path | None, typer.Option("--db", help="Object database (default: learnt).")
     ] = None,
+    learn: Annotated[
+        str | None,
+        typer.Option(
+            "--learn",
+            metavar="LABEL,...",
+            help="Learn only these objects; the others are scored as distractors.",
+        ),
+    ] = None,
+    learn_only: Annotated[
+        float | None,
+        typer.Option(
+            "--learn-only",
+            help="Learn only this share of the objects (e.g. 0.5), drawn with --split-seed.",
+        ),
+    ] = None,
+    split_seed: Annotated[
+        int, typer.Option("--split-seed", help="Seed of the --learn-only draw.")
+    ] = 0,
+    other_part: Annotated[
+        bool,
+        typer.Option("--other-part", help="Learn the objects --learn/--learn-only leave out."),
+    ] = False,
     quiet: QuietOpt = False,
 ) -> None:
     """Describe every scene of a dataset and score it against the ground truth."""
-    from scenespeak.tools.evaluation import evaluate, format_table
+    from scenespeak.tools.evaluation import LearnSplit, evaluate, format_table
+
+    split = LearnSplit(
+        learn=tuple(x.strip() for x in (learn or "").split(",") if x.strip()),
+        fraction=learn_only,
+        seed=split_seed,
+        other=other_part,
+    )
 
     if db is not None:
         from scenespeak.perception import dbfiles
@@ -46,7 +75,9 @@ def evaluate_cmd(
 
     progress = _progress(0, "evaluating", quiet)
     if progress is None:
-        result = evaluate(dataset, db=db, workers=workers, progress=None, scheduler=scheduler)
+        result = evaluate(
+            dataset, db=db, workers=workers, progress=None, scheduler=scheduler, learn=split
+        )
     else:
         with progress:
             task = progress.add_task("describing scenes", total=None)
@@ -55,6 +86,6 @@ def evaluate_cmd(
                 progress.update(task, completed=done, total=total)
 
             result = evaluate(
-                dataset, db=db, workers=workers, progress=advance, scheduler=scheduler
+                dataset, db=db, workers=workers, progress=advance, scheduler=scheduler, learn=split
             )
     _echo(json.dumps(result.to_dict()) if as_json else format_table(result))

@@ -12,7 +12,10 @@ format, ``docs/scenes.md``; ``docs/evaluation.md`` says how to label your own) a
   behind) equals the true one, over the pairs that were described; pairs the ground truth marks
   as *ambiguous* (near a diagonal) are counted apart;
 - **centroid error** — distance between the described and the true centroid, metres;
-- **time per scene** — wall-clock seconds of the chain per scene (load, match, describe).
+- **time per scene** — wall-clock seconds of the chain per scene (load, match, describe);
+- **known objects reported where they are not** — and where they were put
+  (:mod:`scenespeak.tools.evaluation_split`); with ``learn=LearnSplit(...)`` the database learns
+  only part of the objects and the others are distractors (leave-part-out).
 
 The scoring is pure (:func:`score_scene`, :func:`summarize`), so it can be checked by hand:
 
@@ -34,9 +37,11 @@ The scoring is pure (:func:`score_scene`, :func:`summarize`), so it can be check
 
 from __future__ import annotations
 
+import functools
 import tempfile
 import time
 from collections.abc import Callable, Mapping, Sequence
+from dataclasses import replace
 from os import PathLike
 from pathlib import Path
 from typing import Any
@@ -52,6 +57,7 @@ from scenespeak.tools.evaluation_scores import (
     score_scene,
     summarize,
 )
+from scenespeak.tools.evaluation_split import LearnSplit, choose_learnt, with_unlearnt
 from scenespeak.tools.evaluation_tables import BANDS, PAPER, format_table
 from scenespeak.tools.evaluation_truth import (
     PredictedScene,
@@ -67,11 +73,13 @@ __all__ = [
     "MATCH_GATE_M",
     "PAPER",
     "EvaluationResult",
+    "LearnSplit",
     "PredictedScene",
     "SceneScore",
     "SceneTruth",
     "TruthObject",
     "TruthRelation",
+    "choose_learnt",
     "evaluate",
     "find_scenes",
     "format_table",
@@ -143,23 +151,31 @@ def _indexed_scenes(root: Path, index: Path) -> list[Path]:
     return scenes
 
 
-def evaluate_scene(scene_dir: str, db_path: str) -> SceneScore:
+def evaluate_scene(scene_dir: str, db_path: str, learnt: Sequence[str] | None = None) -> SceneScore:
     """Describe one scene folder and score it (pure apart from reading files; picklable).
 
     A scene the chain cannot use (a :class:`~scenespeak.errors.ScenespeakError`) is scored as
-    not usable with the error kept; a broken ``truth.json`` raises.
+    not usable with the error kept; a broken ``truth.json`` raises. ``learnt``: the labels the
+    database learnt when it learnt only part of them (the others are scored as distractors).
     """
     from scenespeak.perception.database import ObjectDatabase
 
     with ObjectDatabase.open(db_path, readonly=True) as db:
-        return _evaluate_one(scene_dir, db)
+        return _evaluate_one(scene_dir, db, learnt=learnt)
 
 
-def _evaluate_one(scene_dir: str, db: Any, options: dict[str, Any] | None = None) -> SceneScore:
+def _evaluate_one(
+    scene_dir: str,
+    db: Any,
+    options: dict[str, Any] | None = None,
+    learnt: Sequence[str] | None = None,
+) -> SceneScore:
     from scenespeak.scene_folder import describe_scene_folder
 
     scene = Path(scene_dir)
     truth = load_scene_truth(scene)
+    if learnt is not None:
+        truth = with_unlearnt(truth, learnt)
     start = time.perf_counter()
     try:
         desc = describe_scene_folder(scene, db, **(options or {}))
@@ -169,12 +185,15 @@ def _evaluate_one(scene_dir: str, db: Any, options: dict[str, Any] | None = None
     return score_scene(pred, truth)
 
 
-def evaluate_batch(scene_dirs: Sequence[str], database: Any) -> list[SceneScore]:
+def evaluate_batch(
+    scene_dirs: Sequence[str], database: Any, learnt: Sequence[str] | None = None
+) -> list[SceneScore]:
     """Score a batch of scene folders: the task the engine (:mod:`scenespeak.tools.engine`)
-    runs on its workers, with the database its worker opened once (``database.get()``)."""
+    runs on its workers, with the database its worker opened once (``database.get()``);
+    ``learnt`` as in :func:`evaluate_scene`."""
     db = database.get()
     options = database.scene_options() if hasattr(database, "scene_options") else {}
-    return [_evaluate_one(scene, db, options) for scene in scene_dirs]
+    return [_evaluate_one(scene, db, options, learnt) for scene in scene_dirs]
 
 
 def evaluate(
@@ -184,6 +203,7 @@ def evaluate(
     workers: int = 2,
     progress: Callable[[int, int], Any] | None = None,
     scheduler: str | None = None,
+    learn: LearnSplit | None = None,
 ) -> EvaluationResult:
     """Run the whole chain over a folder of labelled scenes and score it: the paper's experiment.
 
@@ -202,6 +222,12 @@ def evaluate(
         Called as ``progress(done, total)`` as scenes finish.
     scheduler : str, optional
         Run on an existing Dask cluster (``tcp://HOST:PORT``) instead; ``workers`` is ignored.
+    learn : LearnSplit, optional
+        Learn only part of the dataset's objects (leave-part-out): the others become
+        distractors in every scene, so every known object named away from a true instance of
+        its label is false. The result's ``extra`` (and ``--json``) then names the ``learnt``
+        and ``unlearnt`` labels and the ``split``. Needs the dataset's training views (not
+        ``db``).
 
     Returns
     -------
@@ -210,7 +236,8 @@ def evaluate(
     Raises
     ------
     InputError
-        No such folder, no scene in it, no training views and no ``db``, a broken truth file.
+        No such folder, no scene in it, no training views and no ``db``, a broken truth file,
+        ``learn`` with ``db`` or naming labels the dataset does not have.
     """
     from scenespeak.tools.engine import EngineOptions
 
@@ -219,13 +246,19 @@ def evaluate(
     engine = EngineOptions(workers=workers, scheduler=scheduler)
     root = Path(dataset_dir)
     scenes = find_scenes(root)
+    split = learn if learn is not None and learn.active else None
+    if split is not None and db is not None:
+        raise InputError("--learn", "learns from the dataset's training views; drop --db")
+    learnt: tuple[str, ...] | None = None
     start = time.perf_counter()
     with tempfile.TemporaryDirectory(prefix="scenespeak-eval-") as tmp:
         if db is None:
-            from scenespeak.pipeline import database_from_dataset
+            from scenespeak.pipeline import database_from_dataset, dataset_labels
 
             db_path = Path(tmp) / "objects.db"
-            if not database_from_dataset(root, db_path):
+            available = dataset_labels(root)
+            learnt = split.labels(available) if split is not None else None
+            if not database_from_dataset(root, db_path, labels=learnt):
                 raise InputError(root / "objects", "holds no training views to learn from")
         elif isinstance(db, str | PathLike):
             db_path = Path(db)
@@ -233,10 +266,18 @@ def evaluate(
                 raise InputError(db_path, "no such object database")
         else:
             db_path = Path(db.path)
-        scores = _run(scenes, db_path, engine, progress)
-    return summarize(
+        scores = _run(scenes, db_path, engine, progress, learnt)
+    result = summarize(
         scores, dataset=str(root), workers=workers, wall_seconds=time.perf_counter() - start
     )
+    if split is None or learnt is None:
+        return result
+    extra = {
+        "learnt": list(learnt),
+        "unlearnt": [x for x in available if x not in learnt],
+        "split": split.to_dict(),
+    }
+    return replace(result, extra=extra)
 
 
 def _run(
@@ -244,6 +285,7 @@ def _run(
     db_path: Path,
     engine: Any,
     progress: Callable[[int, int], Any] | None,
+    learnt: Sequence[str] | None = None,
 ) -> list[SceneScore]:
     from scenespeak.tools.engine import run_batches
 
@@ -255,5 +297,6 @@ def _run(
         if progress is not None:
             progress(len(scores), total)
 
-    run_batches(evaluate_batch, [str(s) for s in scenes], engine, on_results=take, database=db_path)
+    task = evaluate_batch if learnt is None else functools.partial(evaluate_batch, learnt=learnt)
+    run_batches(task, [str(s) for s in scenes], engine, on_results=take, database=db_path)
     return scores

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Iterable, Mapping, Sequence
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -17,13 +17,12 @@ import numpy as np
 from scenespeak.errors import InputError
 from scenespeak.tools.centroid_rule import score_point_pairs
 from scenespeak.tools.evaluation_match import (
-    is_known,
     match_objects,
     object_detail,
     tally_relations,
     translate_relations,
-    unmatched,
 )
+from scenespeak.tools.evaluation_split import FALSE_KNOWN_KINDS, false_known_kinds
 from scenespeak.tools.evaluation_tables import PAPER, breakdown
 from scenespeak.tools.evaluation_truth import PredictedScene, SceneTruth
 
@@ -68,6 +67,11 @@ class SceneScore:
         Described objects with a known label placed where no instance of that label is
         (farther than :data:`MATCH_GATE_M` from every one; a distractor named as a learnt
         object counts here).
+    false_known_detail : tuple of (name, kind, near)
+        Per false known object: its described name, where it was put (one of
+        :data:`~scenespeak.tools.evaluation_split.FALSE_KNOWN_KINDS`: on an ``unlearnt``
+        object, a ``duplicate`` of a found one, on a ``neighbour`` of another label, on the
+        ``background``) and the nearest true object within the gate ("" for background).
     surrounded_apart : int
         Described pairs said "surrounded" whose true footprints do not overlap.
     detail : tuple of (label, distance, found, error)
@@ -106,6 +110,7 @@ class SceneScore:
     surrounded_apart: int = 0
     detail: tuple[tuple[str, float, bool, float], ...] = ()
     pitch_deg: float = 0.0
+    false_known_detail: tuple[tuple[str, str, str], ...] = ()
 
 
 def _centroid_scores(
@@ -162,6 +167,7 @@ def score_scene(pred: PredictedScene, truth: SceneTruth) -> SceneScore:
     usable = pred.error is None and found == len(names) and n_described == n_pairs
     by_centroid = translate_relations(_CentroidView(pred.centroid_relations), matched)
     cen_clear, cen_ambiguous, by_tag = _centroid_scores(said, by_centroid, truth)
+    false_known = false_known_kinds(pred, truth, matched)
     return SceneScore(
         name=truth.name,
         usable=usable,
@@ -179,7 +185,8 @@ def score_scene(pred: PredictedScene, truth: SceneTruth) -> SceneScore:
         error=pred.error,
         labels=tuple(o.label for o in known),
         missing=tuple(o.key for o in known if o.key not in to_pred),
-        false_known=_false_known(pred, matched),
+        false_known=len(false_known),
+        false_known_detail=false_known,
         surrounded_apart=apart,
         detail=detail,
         pitch_deg=truth.pitch_deg,
@@ -201,11 +208,6 @@ def _pair_counts(names: Sequence[str], said: Mapping[tuple[str, str], Any]) -> t
     """(ordered pairs of the true objects, those that got a relation)."""
     pairs = [(a, b) for a in names for b in names if a != b]
     return len(pairs), sum(1 for p in pairs if p in said)
-
-
-def _false_known(pred: PredictedScene, matched: Mapping[str, str]) -> int:
-    """Described objects with a known label that match no true object."""
-    return sum(1 for n in unmatched(pred, matched) if is_known(pred.label_of(n)))
 
 
 def _tag_totals(per_scene: Iterable[Mapping[str, Sequence[int]]]) -> dict[str, dict[str, int]]:
@@ -264,6 +266,11 @@ class EvaluationResult:
     def false_known(self) -> int:
         """Known objects reported where no instance of them is."""
         return sum(s.false_known for s in self.scenes)
+
+    def false_known_by_kind(self) -> dict[str, int]:
+        """False known objects counted by where they were put (``FALSE_KNOWN_KINDS``)."""
+        kinds = [k for s in self.scenes for _n, k, _o in s.false_known_detail]
+        return {k: kinds.count(k) for k in FALSE_KNOWN_KINDS}
 
     @property
     def surrounded_apart(self) -> int:
@@ -343,16 +350,21 @@ class EvaluationResult:
                             (str(a), float(b), bool(c), float("nan") if e is None else float(e))
                             for a, b, c, e in s.get("detail", ())
                         ),
+                        "false_known_detail": tuple(
+                            (str(n), str(k), str(o)) for n, k, o in s.get("false_known_detail", ())
+                        ),
                     }
                 )
                 for s in data["per_scene"]
             ]
-            return summarize(
+            result = summarize(
                 scenes,
                 dataset=str(data.get("dataset", "")),
                 workers=int(data.get("workers", 1)),
                 wall_seconds=float(data.get("wall_seconds", 0.0)),
             )
+            kept = {k: data[k] for k in ("learnt", "unlearnt", "split") if k in data}
+            return replace(result, extra=kept) if kept else result
         except (KeyError, TypeError) as exc:
             raise InputError(
                 "evaluation JSON", f"not the output of `evaluate --json` ({exc})"
@@ -366,6 +378,7 @@ class EvaluationResult:
         def stat(a: np.ndarray, f: Callable[[np.ndarray], Any]) -> float | None:
             return None if a.size == 0 else round(float(f(a)), 6)
 
+        by_kind = self.false_known_by_kind()
         cc, ct = self.clear
         ac, at = self.ambiguous
         uc, ut = self.usable_clear
@@ -381,6 +394,9 @@ class EvaluationResult:
             "objects_total": self.objects_total,
             "objects_extra": self.objects_extra,
             "false_known": self.false_known,
+            "false_known_unlearnt": by_kind["unlearnt"],
+            "false_known_elsewhere": self.false_known - by_kind["unlearnt"],
+            "false_known_by_kind": by_kind,
             "surrounded_apart": self.surrounded_apart,
             "pairs_described": self.pairs_described,
             "pairs_total": self.pairs_total,
@@ -405,6 +421,7 @@ class EvaluationResult:
                     "centroid_errors": list(s.centroid_errors),
                     "labels": list(s.labels),
                     "missing": list(s.missing),
+                    "false_known_detail": [list(f) for f in s.false_known_detail],
                     "detail": [
                         [a, b, c, None if math.isnan(e) else round(e, 6)] for a, b, c, e in s.detail
                     ],

@@ -126,6 +126,9 @@ def format_table(result: EvaluationResult) -> str:
         by_label = ", ".join(f"{lab} {f}/{n}" for lab, (f, n) in sorted(found.items()))
         lines += ["", f"Objects found by label: {by_label}."]
     lines += breakdown_table(result.scenes)
+    if d.get("learnt") is not None:
+        lines += ["", f"Learnt: {', '.join(d['learnt'])}; not learnt (distractors): "
+                  f"{', '.join(d['unlearnt']) or '–'}."]  # fmt: skip
     lines += _failed_lines(result)
     return "\n".join(lines)
 
@@ -153,6 +156,8 @@ def _summary_rows(result: EvaluationResult, d: Mapping[str, Any]) -> list[tuple[
         ("centroid error, median / mean", cent, "–"),
         ("centroid error, 90th percentile", p90, "–"),
         ("known objects reported where they are not", str(result.false_known), "–"),
+        ("… on an unlearnt object / elsewhere (duplicate, neighbour, background)",
+         _false_known_split(d), "–"),
         ("\"surrounded\" between objects whose footprints are apart",
          str(result.surrounded_apart), "–"),
         ("time per scene, median / mean", secs, "–"),
@@ -162,6 +167,15 @@ def _summary_rows(result: EvaluationResult, d: Mapping[str, Any]) -> list[tuple[
         ("centroid-vector rule instead: ambiguous pairs",
          _frac(d["centroid_rule"]["ambiguous_correct"], at), "–"),
     ]  # fmt: skip
+
+
+def _false_known_split(d: Mapping[str, Any]) -> str:
+    """``unlearnt / elsewhere (duplicate, neighbour, background)`` of ``to_dict()``."""
+    k = d["false_known_by_kind"]
+    return (
+        f"{d['false_known_unlearnt']} / {d['false_known_elsewhere']} "
+        f"({k['duplicate']}, {k['neighbour']}, {k['background']})"
+    )
 
 
 _TAG_TABLES = (
