@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import json
+from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
-from typing import Annotated
+from typing import TYPE_CHECKING, Annotated, Any
 
 import typer
 
@@ -14,25 +16,31 @@ from scenespeak.cli._app import (
     _progress,
     app,
 )
+from scenespeak.cli._options import takes_options
+
+if TYPE_CHECKING:
+    from scenespeak.tools.evaluation import EvaluationResult
 
 
-@app.command("evaluate")
-def evaluate_cmd(
-    dataset: Annotated[Path, typer.Argument(help="A generated dataset folder.")],
-    as_json: Annotated[bool, typer.Option("--json", help="Print JSON.")] = False,
+@dataclass(frozen=True, kw_only=True)
+class EvaluateCommand:
+    """The command line of ``scenespeak evaluate`` (see :mod:`scenespeak.cli._options`)."""
+
+    dataset: Annotated[Path, typer.Argument(help="A generated dataset folder.")]
+    as_json: Annotated[bool, typer.Option("--json", help="Print JSON.")] = False
     workers: Annotated[
         int,
         typer.Option(
             "--workers", min=1, max=256, help="Local Dask worker processes (1: this one; <= 256)."
         ),
-    ] = 2,
+    ] = 2
     scheduler: Annotated[
         str | None,
         typer.Option("--scheduler", help="An existing Dask scheduler, tcp://HOST:PORT."),
-    ] = None,
-    db: Annotated[
-        Path | None, typer.Option("--db", help="Object database (default: learnt).")
-    ] = None,
+    ] = None
+    db: Annotated[Path | None, typer.Option("--db", help="Object database (default: learnt).")] = (
+        None
+    )
     learn: Annotated[
         str | None,
         typer.Option(
@@ -40,52 +48,61 @@ def evaluate_cmd(
             metavar="LABEL,...",
             help="Learn only these objects; the others are scored as distractors.",
         ),
-    ] = None,
+    ] = None
     learn_only: Annotated[
         float | None,
         typer.Option(
             "--learn-only",
             help="Learn only this share of the objects (e.g. 0.5), drawn with --split-seed.",
         ),
-    ] = None,
+    ] = None
     split_seed: Annotated[
         int, typer.Option("--split-seed", help="Seed of the --learn-only draw.")
-    ] = 0,
+    ] = 0
     other_part: Annotated[
         bool,
         typer.Option("--other-part", help="Learn the objects --learn/--learn-only leave out."),
-    ] = False,
-    quiet: QuietOpt = False,
-) -> None:
+    ] = False
+    quiet: QuietOpt = False
+
+
+@app.command("evaluate")
+@takes_options(EvaluateCommand)
+def evaluate_cmd(o: EvaluateCommand) -> None:
     """Describe every scene of a dataset and score it against the ground truth."""
     from scenespeak.tools.evaluation import LearnSplit, evaluate, format_table
 
     split = LearnSplit(
-        learn=tuple(x.strip() for x in (learn or "").split(",") if x.strip()),
-        fraction=learn_only,
-        seed=split_seed,
-        other=other_part,
+        learn=tuple(x.strip() for x in (o.learn or "").split(",") if x.strip()),
+        fraction=o.learn_only,
+        seed=o.split_seed,
+        other=o.other_part,
     )
-
-    if db is not None:
+    if o.db is not None:
         from scenespeak.perception import dbfiles
 
-        dbfiles.check_file(db)
-        dbfiles.validate(db)
+        dbfiles.check_file(o.db)
+        dbfiles.validate(o.db)
 
-    progress = _progress(0, "evaluating", quiet)
-    if progress is None:
-        result = evaluate(
-            dataset, db=db, workers=workers, progress=None, scheduler=scheduler, learn=split
+    def run(progress: Callable[[int, int], Any] | None) -> EvaluationResult:
+        return evaluate(
+            o.dataset,
+            db=o.db,
+            workers=o.workers,
+            progress=progress,
+            scheduler=o.scheduler,
+            learn=split,
         )
+
+    bar = _progress(0, "evaluating", o.quiet)
+    if bar is None:
+        result = run(None)
     else:
-        with progress:
-            task = progress.add_task("describing scenes", total=None)
+        with bar:
+            task = bar.add_task("describing scenes", total=None)
 
             def advance(done: int, total: int) -> None:
-                progress.update(task, completed=done, total=total)
+                bar.update(task, completed=done, total=total)
 
-            result = evaluate(
-                dataset, db=db, workers=workers, progress=advance, scheduler=scheduler, learn=split
-            )
-    _echo(json.dumps(result.to_dict()) if as_json else format_table(result))
+            result = run(advance)
+    _echo(json.dumps(result.to_dict()) if o.as_json else format_table(result))
