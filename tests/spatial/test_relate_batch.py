@@ -372,6 +372,11 @@ def test_four_direction_degrees_match_four_degrees(seed: int, nbins: int) -> Non
         ref = four_degrees(h[r])
         assert degree[r].tolist() == [ref[d].degree for d in DIRECTIONS]
         assert deviation[r].tolist() == [ref[d].deviation for d in DIRECTIONS]
+    # Rows of a bigger array (as f0_f2_pairs' views of the sweep): the same floats.
+    strided = np.stack([h, h[::-1]], axis=1)[:, 0]
+    assert not strided.flags.c_contiguous or len(h) == 1
+    again = four_direction_degrees(strided)
+    assert again[0].tobytes() == degree.tobytes() and again[1].tobytes() == deviation.tobytes()
 
 
 @settings(max_examples=40, deadline=None)

@@ -345,6 +345,25 @@ def test_many_f0_and_f2_matches_the_public_functions(seed: int) -> None:
         np.testing.assert_array_equal(f2, ref2)
 
 
+def test_f0_f2_pairs_of_objects_apart_are_the_masked_rows() -> None:
+    """Where every pair is apart with a finite F2, ``f0_f2_pairs`` returns the sweep's rows
+    as views; they are the rows the general path (some pair given F02 directly) copies, bit
+    for bit, and index arrays give what index lists give."""
+    rng = np.random.default_rng(3)
+    sq = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
+    objs = [forces.prepare(sq * rng.uniform(0.5, 1.5) + [3.0 * k, k % 2], f"{k}") for k in range(5)]
+    pairs = [(i, j) for i in range(5) for j in range(i + 1, 5)]
+    fast = forces.f0_f2_pairs(objs, directions=36)
+    assert not fast.hybrid.any() and not fast.f0.flags.c_contiguous  # the views
+    general = forces.f0_f2_pairs(objs, pairs, 36, try_f2=[True] * (len(pairs) - 1) + [False])
+    assert general.hybrid.tolist() == [False] * (len(pairs) - 1) + [True]
+    assert fast.f0[:-1].tobytes() == general.f0[:-1].tobytes()
+    assert fast.f2[:-1].tobytes() == general.f2[:-1].tobytes()
+    as_arrays = forces.f0_f2_pairs(objs, np.array(pairs), 36, try_f2=np.ones(len(pairs), bool))
+    assert as_arrays.f0.tobytes() == fast.f0.tobytes()
+    assert as_arrays.f2.tobytes() == fast.f2.tobytes()
+
+
 @settings(max_examples=40)
 @given(seeds)
 def test_pairs_keep_every_overlapping_edge_pair(seed: int) -> None:

@@ -372,16 +372,31 @@ def four_direction_degrees(
 
 
 @functools.lru_cache(maxsize=32)
-def _turned_columns(nbins: int, shift: int) -> tuple[NDArray[np.intp], NDArray[np.intp], int]:
+def _turned_columns(
+    nbins: int, shift: int
+) -> tuple[NDArray[np.intp], NDArray[np.intp], int, NDArray[np.intp]]:
     """The columns of :func:`_block_degrees` for the direction of bin ``shift``: the
     favourable bins of both sides (positive side, then negative, each from the pivot inwards),
-    the contrary bins of both sides, and the opposite bin (read-only)."""
+    the contrary bins of both sides, the opposite bin, and the favourable bins in the order of
+    the effective forces, ``phi = -(n-1) .. n-1`` (all read-only)."""
     c = _constants(nbins)
+    n = nbins // 4
     fav = (shift + np.concatenate([c.phis, c.neg_phis])) % nbins
     con = (shift + np.concatenate([c.cphi, c.neg_cphi])) % nbins
-    fav.setflags(write=False)
-    con.setflags(write=False)
-    return fav, con, (shift + nbins // 2) % nbins
+    eff = (shift + np.arange(-(n - 1), n)) % nbins
+    for a in (fav, con, eff):
+        a.setflags(write=False)
+    return fav, con, (shift + nbins // 2) % nbins, eff
+
+
+def _gathered(
+    flat: NDArray[np.float64], base: NDArray[np.intp], columns: NDArray[np.intp]
+) -> NDArray[np.float64]:
+    """``(len(base), len(columns))``: ``flat[base[i] + columns[j]]`` (C-ordered), where ``flat``
+    is a C-ordered ``(R, N)`` array raveled and ``base`` the rows' offsets ``row * N``: the
+    rows' columns in one ``take`` of the values needed (not the whole rows first)."""
+    index = base[:, None] + columns
+    return flat.take(index)
 
 
 def _cancelled(
@@ -496,34 +511,42 @@ def _block_degrees(
     n = nbins // 4
     rows = len(at)
     c = _constants(nbins)
-    fav_cols, con_cols, opposite_col = _turned_columns(nbins, shift)
-    # Both sides of each row, interleaved: row 2i is row i's positive side, 2i + 1 its
-    # negative side. Every array is C-contiguous: NumPy sums a row of a C-ordered array in
+    fav_cols, con_cols, opposite_col, eff_cols = _turned_columns(nbins, shift)
+    # Each value is gathered from the raveled histograms at once (``_gathered``: one
+    # ``take`` of the columns needed, about twice as fast as taking the rows first and then
+    # their columns). Every array is C-contiguous: NumPy sums a row of a C-ordered array in
     # the same order as a 1-D array, but not always a row of an F-ordered one.
-    # The rows first, then their columns (two ``take``: about a third faster than one 2-D
-    # fancy index, and C-ordered as well).
-    block = h.take(at, axis=0)
-    fav = block.take(fav_cols, axis=1).reshape(2 * rows, n)
-    fav[:, -1] *= 0.5
+    flat = np.ascontiguousarray(h).reshape(-1)
+    base = np.asarray(at, dtype=np.intp) * nbins
     if contrary_forces:
-        con = block.take(con_cols, axis=1).reshape(2 * rows, n)
-        opposite = 0.5 * block[:, opposite_col]
+        # Both sides of each row, interleaved: row 2i is row i's positive side, 2i + 1 its
+        # negative side.
+        fav = _gathered(flat, base, fav_cols).reshape(2 * rows, n)
+        fav[:, -1] *= 0.5
+        con = _gathered(flat, base, con_cols).reshape(2 * rows, n)
+        opposite = 0.5 * flat.take(base + opposite_col)
         moment = _row_dots(con, c.arm) + np.repeat(opposite, 2) * n
         con_sum = con.sum(axis=1)
         contrary = (con_sum[0::2] + con_sum[1::2]) + 2.0 * opposite
         cancelled = _cancelled(fav, moment, c.dist)
         contrary = (contrary + cancelled[0::2]) + cancelled[1::2]
+        fav_pos, fav_neg = fav[0::2], fav[1::2]
+        eff = np.concatenate(
+            [fav_neg[:, :-1], fav_pos[:, -1:] + fav_neg[:, -1:], fav_pos[:, ::-1][:, 1:]], axis=1
+        )
     else:
+        # Nothing cancelled: the effective forces are the favourable bins in the order of
+        # phi, the bin at phi = 0 the sum of its two halves (the same floats as above).
+        eff = _gathered(flat, base, eff_cols)
+        half = 0.5 * eff[:, n - 1]
+        eff[:, n - 1] = half + half
         contrary = np.zeros(rows)
-    fav_pos, fav_neg = fav[0::2], fav[1::2]
-    eff = np.concatenate(
-        [fav_neg[:, :-1], fav_pos[:, -1:] + fav_neg[:, -1:], fav_pos[:, ::-1][:, 1:]], axis=1
-    )
     total = eff.sum(axis=1)
     scale = np.maximum(total + contrary, 1e-300)
     with np.errstate(divide="ignore", invalid="ignore"):
         tau = _row_dots(eff, c.weight) / c.weight_sum
-        above = np.maximum(eff - tau[:, None], 0.0)
+        above = eff - tau[:, None]
+        np.maximum(above, 0.0, out=above)
         mass = above.sum(axis=1)
         if bool((mass > 0.0).all()):
             theta = _row_dots(above, c.phi) / mass

@@ -361,7 +361,8 @@ class PairForces:
     ----------
     f0, f2 : ndarray, shape (P, directions)
         Constant and gravitational forces of each pair; ``f2[p]`` is the hybrid F02 (Matsakis'
-        defaults ``p0 = 0.01``, ``p1 = 3``) where ``hybrid[p]``.
+        defaults ``p0 = 0.01``, ``p1 = 3``) where ``hybrid[p]``. Each row is contiguous; the
+        two may be views of one ``(P, 2, directions)`` array (then not C-contiguous as a whole).
     hybrid : ndarray of bool, shape (P,)
     """
 
@@ -396,10 +397,10 @@ def _y0(a: Region, b: Region, inter: float) -> float:
 
 def f0_f2_pairs(
     regions: Sequence[Region],
-    pairs: Sequence[tuple[int, int]] | None = None,
+    pairs: Sequence[tuple[int, int]] | NDArray[np.intp] | None = None,
     directions: int = 180,
     *,
-    try_f2: Sequence[bool] | None = None,
+    try_f2: Sequence[bool] | NDArray[np.bool_] | None = None,
 ) -> PairForces:
     """F0 and F2 (or F02) of many pairs of prepared objects, in one sweep.
 
@@ -414,11 +415,11 @@ def f0_f2_pairs(
     ----------
     regions : sequence of Region
         From :func:`prepare`.
-    pairs : sequence of (int, int), optional
+    pairs : sequence of (int, int) or (P, 2) int array, optional
         ``(argument, referent)`` indices; default every unordered pair ``i < j`` (the
         histograms of ``(j, i)`` are those of ``(i, j)`` turned by half a turn).
     directions : int, default 180
-    try_f2 : sequence of bool, optional
+    try_f2 : sequence or array of bool, optional
         Per pair, whether to try F2 at all (False: F02 directly, e.g. for footprints already
         known to overlap).
 
@@ -462,6 +463,10 @@ def f0_f2_pairs(
         with np.errstate(all="ignore"):
             swept = sweep_pairs(regions, index[tried].tolist(), [_F0, _F2], directions)
         finite = np.isfinite(swept[:, 1]).all(axis=1)
+        if tried.size == n and bool(finite.all()):
+            # Every pair apart with a finite F2 (the usual scene): F0 and F2 are the sweep's
+            # own rows (views, not copied twice through a mask).
+            return PairForces(f0=swept[:, 0], f2=swept[:, 1], hybrid=np.zeros(n, bool))
         ok = tried[finite]
         f0[ok], f2[ok] = swept[finite, 0], swept[finite, 1]
         hybrid[ok] = False

@@ -143,12 +143,13 @@ def _forces(
         slot = np.cumsum(ready) - 1
         got = forces.f0_f2_pairs(
             [r for r in regions if r is not None],
-            np.column_stack([slot[first[swept]], slot[second[swept]]]).tolist(),
+            np.column_stack([slot[first[swept]], slot[second[swept]]]),
             directions,
-            try_f2=(~intersecting[swept]).tolist(),
+            try_f2=~intersecting[swept],
         )
-        if swept.size == len(first):  # every pair swept (the usual case): no copy
-            # C-ordered rows: the row sums of the rule base are then those of 1-D arrays.
+        if swept.size == len(first):  # every pair swept (the usual case)
+            # C-ordered rows: the row sums of the rule base are then those of 1-D arrays (one
+            # copy where the sweep's F0 and F2 are views of one array, else none).
             f0, f2 = np.ascontiguousarray(got.f0), np.ascontiguousarray(got.f2)
             return f0, f2, np.asarray(got.hybrid, dtype=bool)
     f0 = np.empty((len(first), directions))
