@@ -655,6 +655,46 @@ def test_faiss_finds_the_neighbours_of_the_numpy_index(real_descriptors: NDArray
     np.testing.assert_array_equal(i_fast[clear, 0], i_ivf[clear, 0])
 
 
+def test_faiss_lists_hold_what_one_add_makes(
+    real_descriptors: NDArray[np.uint8], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The inverted lists filled in small blocks, each list sized once beforehand, hold the
+    codes and ids, list by list and in the same order, that one ``add_core`` of all the
+    descriptors gives; the searches agree to the bit."""
+    faiss = pytest.importorskip("faiss")
+    from scenespeak.perception.recognition import ivf
+
+    base, query = real_descriptors[300:], real_descriptors[:300]
+    monkeypatch.setattr(ivf, "_FILL_ROWS", 1000)
+    assert len(base) > 3 * 1000
+    chunks = [base[s : s + 700] for s in range(0, len(base), 700)]
+    fast = FaissIndex.from_chunks(lambda: iter(chunks), len(base), nlist=64, nprobe=4)
+    assert fast.ntotal == len(base) == fast._index.ntotal
+    ref = faiss.IndexIVFScalarQuantizer(
+        fast._quantizer, 128, 64, faiss.ScalarQuantizer.QT_8bit_direct, faiss.METRIC_L2
+    )
+    ref.by_residual = False
+    ref.train(np.zeros((1, 128), np.float32))
+    x = base.astype(np.float32)
+    cells = np.ascontiguousarray(fast.cells(), np.int64)
+    ref.add_core(len(x), faiss.swig_ptr(x), None, faiss.swig_ptr(cells))
+    mine, theirs = fast._index.invlists, ref.invlists
+    for cell in range(64):
+        n = theirs.list_size(cell)
+        assert mine.list_size(cell) == n
+        if n == 0:
+            continue
+        codes = [faiss.rev_swig_ptr(lists.get_codes(cell), n * 128) for lists in (mine, theirs)]
+        ids = [faiss.rev_swig_ptr(lists.get_ids(cell), n) for lists in (mine, theirs)]
+        np.testing.assert_array_equal(codes[0], codes[1])
+        np.testing.assert_array_equal(ids[0], ids[1])
+    ref.nprobe = 4
+    d_ref, i_ref = ref.search(query.astype(np.float32), 16)
+    d_fast, i_fast = fast.search(query, 16)
+    np.testing.assert_array_equal(i_fast, i_ref)
+    np.testing.assert_array_equal(d_fast, np.where(i_ref < 0, np.inf, d_ref))
+
+
 @pytest.mark.parametrize("kind", ["ivf", "faiss"])
 def test_labelling_with_an_inverted_file(built_db: Path, scene: Scene, kind: str) -> None:
     if kind == "faiss":

@@ -97,7 +97,10 @@ def quantiser_fits(
     finite and inside the descriptors' range (a k-means mean of ``uint8`` vectors lies in
     [0, 255]), and the cached cell of a fixed sample of ``sample`` descriptors (every
     ``n / sample``-th) must be its nearest centroid, up to float32 rounding. One pass over
-    the chunks, ``sample`` distance rows: a few milliseconds against seconds of training.
+    the chunks, ``sample`` distance rows: a few milliseconds against seconds of training
+    (the sample copied out of its chunks, which views of them kept alive: 73 MB at 1,000
+    objects, as much as the index; the distances 256 rows at a time, 16 MB at once at nlist
+    2,048).
 
     >>> rng = np.random.default_rng(0)
     >>> x = rng.integers(0, 256, (500, 128)).astype(np.uint8)
@@ -121,16 +124,20 @@ def quantiser_fits(
     start = 0
     for block in chunks():
         first = (-start) % step
-        rows.append(block[first::step])
+        rows.append(block[first::step].copy())  # not a view: it would keep the whole chunk
         start += block.shape[0]
     if start != n:
         return False
     x = np.concatenate(rows).astype(np.float32) if rows else np.zeros((0, _DIM), np.float32)
     picked = cell[::step][: x.shape[0]]
-    d = np.einsum("ij,ij->i", x, x)[:, None] - 2.0 * (x @ c.T) + np.einsum("ij,ij->i", c, c)
-    best = d.min(axis=1)
-    mine = d[np.arange(x.shape[0]), picked]
-    wrong = mine > best + 1e-3 * np.maximum(1.0, np.abs(best))
+    cn = np.einsum("ij,ij->i", c, c)
+    wrong = np.zeros(x.shape[0], bool)
+    for s in range(0, x.shape[0], 256):  # 256 distance rows at a time (2 MB at nlist 2048)
+        xs = x[s : s + 256]
+        d = np.einsum("ij,ij->i", xs, xs)[:, None] - 2.0 * (xs @ c.T) + cn
+        best = d.min(axis=1)
+        mine = d[np.arange(xs.shape[0]), picked[s : s + 256]]
+        wrong[s : s + 256] = mine > best + 1e-3 * np.maximum(1.0, np.abs(best))
     return bool(wrong.mean() <= 0.01) if wrong.size else True
 
 
@@ -506,6 +513,41 @@ class IVFIndex(_IndexBuilder):
         return pair_d, pair_i
 
 
+#: Rows per float32 block added to a FAISS index (16 MiB; 8,192 rows cost each load 0.25 s
+#: more CPU at 1,000 objects, FAISS going over every list per block).
+_FILL_ROWS = 32768
+
+
+def _fill_lists(
+    index: Any,
+    chunks: Callable[[], Iterator[NDArray[np.uint8]]],
+    assign: NDArray[np.intp],
+    nlist: int,
+) -> None:
+    """Add the descriptors to a FAISS inverted file under their cells ``assign``.
+
+    Each list's memory is allocated once at its final size (growing it as the blocks arrive
+    left part of it unused), and the descriptors go in as float32 blocks of
+    :data:`_FILL_ROWS` rows (65,536 rows took 32 MiB at once). ``add_core`` puts each list's
+    entries in the order of the ids, whatever the blocks: the same lists (tested). At 1,000
+    objects the load's peak (tracemalloc) went from 118.7 to 60.5 MB and its RSS growth from
+    152 to 98-105 MB, with :func:`quantiser_fits`'s sample no longer holding every chunk.
+    """
+    import faiss  # optional dependency
+
+    lists = faiss.downcast_InvertedLists(index.invlists)
+    counts = np.bincount(assign, minlength=nlist)
+    for cell in np.flatnonzero(counts).tolist():
+        lists.resize(cell, int(counts[cell]))  # the capacity, once; then filled from 0
+        lists.resize(cell, 0)
+    start = 0
+    for block in _batches(chunks, _FILL_ROWS):
+        x = np.ascontiguousarray(block, np.float32)
+        pre = np.ascontiguousarray(assign[start : start + x.shape[0]], np.int64)
+        index.add_core(x.shape[0], faiss.swig_ptr(x), None, faiss.swig_ptr(pre))
+        start += x.shape[0]
+
+
 class FaissIndex(_IndexBuilder):
     """FAISS ``IndexIVFScalarQuantizer`` with ``QT_8bit_direct``: exact ``uint8`` storage.
 
@@ -547,12 +589,7 @@ class FaissIndex(_IndexBuilder):
         # Encode the descriptors themselves, not residuals: QT_8bit_direct stores 0..255 as is.
         index.by_residual = False
         index.train(np.zeros((1, _DIM), np.float32))  # 8-bit direct: nothing to learn
-        start = 0
-        for block in _batches(chunks, 65536):
-            x = np.ascontiguousarray(block, np.float32)
-            pre = np.ascontiguousarray(assign[start : start + x.shape[0]], np.int64)
-            index.add_core(x.shape[0], faiss.swig_ptr(x), None, faiss.swig_ptr(pre))
-            start += x.shape[0]
+        _fill_lists(index, chunks, assign, nl)
         self._cells = assign.astype(np.uint16 if nl <= 65535 else np.int32)
         self._index = index
         self._quantizer = quantizer
