@@ -339,13 +339,71 @@ def test_the_collector_is_restored(enabled: bool) -> None:
     try:
         (gc.enable if enabled else gc.disable)()
         sq = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
-        language.relate_objects([sq, sq + 3, sq - 3], names=["a", "b", "c"])
+        found = language.relate_objects([sq, sq + 3, sq - 3], names=["a", "b", "c"])
+        assert gc.isenabled() is enabled
+        assert len(list(found)) == 6  # the results made on the first read: restored too
         assert gc.isenabled() is enabled
         with pytest.raises(RuntimeError), relate_module._collector_paused():
             raise RuntimeError
         assert gc.isenabled() is enabled
     finally:
         (gc.enable if was else gc.disable)()
+
+
+def test_the_results_behave_as_the_list() -> None:
+    """``relate_objects`` returns a sequence made on first read that behaves as the list of
+    its pairs: items, slices, iteration, comparison, ``in``, ``+``, ``*``, ``repr``, pickling
+    and copying, unhashable; ``len`` makes nothing; the objects are made once."""
+    sq = np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
+    hulls, names = [sq, sq + np.array([3.0, 0.2]), sq + np.array([0.5, 2.0])], list("abc")
+    found = language.relate_objects(hulls, names=names)
+    assert isinstance(found, language.RelatedPairs)
+    assert len(found) == 6 and found._items is None  # nothing made yet
+    as_list = reference(hulls, names, None)
+    assert_same(list(found), as_list)
+    same = found._items
+    assert same is not None and list(found) == same and found[0] is same[0]
+    assert found[-1] is same[-1] and found[1:4] == same[1:4] and found[::-1] == same[::-1]
+    assert list(reversed(found)) == same[::-1]
+    assert found == same and same == found and not (found != same)
+    assert found == language.RelatedPairs(lambda: list(same), 6)  # the same items
+    assert found != language.relate_objects(hulls[:2], names=names[:2]) and found != same[:5]
+    assert same[2] in found and found.index(same[2]) == 2 and found.count(same[2]) == 1
+    assert (found + same[:1])[-1] is same[0] and (same[:1] + found)[1] is same[0]
+    assert found * 2 == same * 2 and 2 * found == same * 2
+    assert repr(found) == repr(same) and bool(found)
+    assert type(copy.copy(found)) is list and copy.copy(found) == same
+    for copied in (pickle.loads(pickle.dumps(found)), copy.deepcopy(found)):
+        assert type(copied) is list and [rel for rel, _ in copied] == [rel for rel, _ in same]
+        assert [h.f2.tobytes() for _, h in copied] == [h.f2.tobytes() for _, h in same]
+    with pytest.raises(TypeError, match="unhashable"):
+        hash(found)
+    with pytest.raises(IndexError):
+        found[6]
+    empty = language.relate_objects([sq], names=["a"])
+    assert len(empty) == 0 and list(empty) == [] and empty == [] and not empty
+
+
+def test_the_results_are_made_once_for_every_reader() -> None:
+    """Several threads reading a fresh result first get the same objects; the maker runs
+    once (the collector paused while it runs) and is then dropped."""
+    import threading
+
+    calls = []
+
+    def make() -> list:
+        calls.append(gc.isenabled())
+        return [(object(), k) for k in range(50)]  # type: ignore[misc]
+
+    lazy = language.RelatedPairs(make, 50)  # type: ignore[arg-type]
+    seen: list[object] = []
+    threads = [threading.Thread(target=lambda: seen.append(lazy[7])) for _ in range(8)]
+    for th in threads:
+        th.start()
+    for th in threads:
+        th.join()
+    assert calls == [False] and lazy._make is None
+    assert len(seen) == 8 and all(item is seen[0] for item in seen)
 
 
 # -- the pieces against the functions they replace ---------------------------------------------

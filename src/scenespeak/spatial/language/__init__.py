@@ -37,7 +37,8 @@ The package's modules, one concern each:
 - :mod:`~.pairs` — polygons → :class:`PairHistograms` → both relations of a pair;
 - :mod:`~.scenepairs` — every pair of a scene's polygons: overlaps and histograms, as arrays;
 - :mod:`~.batch` — the rule base on arrays of pairs (what :mod:`~.rules` does for one pair);
-- :mod:`~.relate` — :func:`relate` (one pair) and :func:`relate_objects` (every pair);
+- :mod:`~.relate` — :func:`relate` (one pair) and :func:`relate_objects` (every pair, as a
+  :class:`~.related.RelatedPairs`: made on first read);
 - :mod:`~.viewer` — :func:`describe_viewer_relation` (the camera as the referent);
 - :mod:`~.summary` — :func:`summarize_scene`;
 - :mod:`~.table` — the README's layout table (``python -m scenespeak.spatial.language --table``).
@@ -53,6 +54,7 @@ from scenespeak.spatial.language.pairs import (
     relations_of_pair,
 )
 from scenespeak.spatial.language.relate import relate, relate_objects
+from scenespeak.spatial.language.related import RelatedPairs
 from scenespeak.spatial.language.relation import Relation
 from scenespeak.spatial.language.rules import RelationFacts, describe_relation
 from scenespeak.spatial.language.summary import summarize_scene
@@ -75,6 +77,7 @@ __all__ = [
     "VERTICAL_WORDS",
     "VIEWER_PATTERNS",
     "PairHistograms",
+    "RelatedPairs",
     "Relation",
     "RelationFacts",
     "Thresholds",

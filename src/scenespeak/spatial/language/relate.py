@@ -2,10 +2,9 @@
 
 from __future__ import annotations
 
-import contextlib
-import gc
+import functools
 import itertools
-from collections.abc import Iterator, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -30,6 +29,7 @@ from scenespeak.spatial.language.pairs import (
     pair_histograms,
     relation_of_pair,
 )
+from scenespeak.spatial.language.related import RelatedPairs, _collector_paused
 from scenespeak.spatial.language.relation import Relation, _RelationFill
 from scenespeak.spatial.language.scenepairs import ScenePairs, scene_pairs
 from scenespeak.spatial.language.thresholds import DEFAULT_THRESHOLDS, Thresholds
@@ -46,7 +46,7 @@ def relate_objects(
     heights: Sequence[ArrayLike] | None = None,
     directions: int = 180,
     thresholds: Thresholds | None = None,
-) -> list[tuple[Relation, PairHistograms]]:
+) -> RelatedPairs:
     """Every ordered pair of a scene's objects: the relation and the histograms behind it.
 
     The same relations and histograms as, for every unordered pair ``i < j``,
@@ -54,9 +54,10 @@ def relate_objects(
     ``pair.reversed()`` (the same floats), but computed for all pairs at once: each polygon is
     validated and prepared once, only hulls whose boxes meet are clipped, F0 and F2 (or F0
     and F02) come from one sweep (:func:`~.scenepairs.scene_pairs`), and the degrees of truth
-    and the rule base run on arrays of all ordered pairs (:mod:`~.batch`). Memory is linear in
-    the pairs. ``benchmarks/bench_relate.py`` times it on 10 to 100 objects (9,900 ordered
-    pairs) next to the per-pair path.
+    and the rule base run on arrays of all ordered pairs (:mod:`~.batch`); the result objects
+    are made from those arrays when the result is first read (:class:`~.related.RelatedPairs`).
+    Memory is linear in the pairs. ``benchmarks/bench_relate.py`` times it on 10 to 100
+    objects (9,900 ordered pairs) next to the per-pair path.
 
     Parameters
     ----------
@@ -74,10 +75,11 @@ def relate_objects(
 
     Returns
     -------
-    list of (Relation, PairHistograms)
-        One entry per ordered pair ``(i, j)``, ``i != j``, in the order ``(0, 1), (0, 2), ...,
-        (1, 0), (1, 2), ...``: the relation of object ``i`` (argument) to object ``j``
-        (referent) and the histograms of ``i`` relative to ``j``.
+    RelatedPairs
+        A sequence that behaves as the list of ``(Relation, PairHistograms)``, one entry per
+        ordered pair ``(i, j)``, ``i != j``, in the order ``(0, 1), (0, 2), ..., (1, 0),
+        (1, 2), ...``: the relation of object ``i`` (argument) to object ``j`` (referent) and
+        the histograms of ``i`` relative to ``j``.
 
     Raises
     ------
@@ -106,7 +108,7 @@ def relate_objects(
         ]
     )
     if len(polygons) < 2:
-        return []
+        return RelatedPairs(list, 0)
     with _collector_paused():
         return _ordered_relations(scene_pairs(polygons, labels, directions), labels, extents, t)
 
@@ -142,12 +144,13 @@ def _ordered_relations(
     labels: Sequence[str],
     extents: Sequence[tuple[float, float, float]] | None,
     t: Thresholds,
-) -> list[tuple[Relation, PairHistograms]]:
+) -> RelatedPairs:
     """Both relations of every pair of ``scene``, in :func:`relate_objects`' order.
 
     Rows ``0..P-1`` are the pairs ``(first, second)``, rows ``P..2P-1`` the same pairs the
     other way round; every step of the rule base runs on all rows at once
-    (:func:`~.batch.decide_pairs`), then each pair becomes its two :class:`Relation`.
+    (:func:`~.batch.decide_pairs`); each pair becomes its two :class:`Relation` when the
+    result is first read (:func:`_build`).
     """
     p = len(scene.first)
     back0, back2 = _half_turned(scene.f0), _half_turned(scene.f2)
@@ -182,9 +185,16 @@ def _ordered_relations(
     confidence = np.minimum(np.maximum(confidence, 0.0), 1.0)
     table = np.empty(len(labels), dtype=object)
     table[:] = labels  # the label strings themselves, gathered without a Python loop
+    n = len(labels)
+    place = np.concatenate(
+        [scene.first * (n - 1) + scene.second - 1, scene.second * (n - 1) + scene.first]
+    )
+    order = np.empty(2 * p, dtype=np.intp)
+    order[place] = np.arange(2 * p)
     rows = _Rows(
-        names=(table[argument].tolist(), table[referent].tolist()),
-        words=_words(decisions),
+        names=(table, argument, referent),
+        decisions=decisions,
+        order=order,
         vertical=vertical,
         hybrid=scene.hybrid.tolist(),
         own=(confidence, decisions.deviation, decisions.extends_share),
@@ -193,13 +203,7 @@ def _ordered_relations(
         areas=(scene.intersection, area_a[:p], area_b[:p]),
         histograms=(scene.f0, back0, scene.f2, back2),
     )
-    n = len(labels)
-    place = np.concatenate(
-        [scene.first * (n - 1) + scene.second - 1, scene.second * (n - 1) + scene.first]
-    )
-    order = np.empty(2 * p, dtype=np.intp)
-    order[place] = np.arange(2 * p)
-    return _build(rows, order.tolist(), sentence_templates(decisions))
+    return RelatedPairs(functools.partial(_build, rows), 2 * p)
 
 
 def _half_turned(h: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -217,29 +221,6 @@ def _turned(x: NDArray[np.float64]) -> NDArray[np.float64]:
     """``(2P, 4)``: the pairs' values of the four directions, then the reversed pairs' (B's
     "left" is A's "right")."""
     return np.concatenate([x, x[:, _TURNED]])
-
-
-@contextlib.contextmanager
-def _collector_paused() -> Iterator[None]:
-    """Pause Python's cycle collector while the pairs are related, then restore it.
-
-    A call makes about five container objects per ordered pair (100,000 for 100 objects:
-    the results, and the lists their numbers come from) and no reference cycle, but every
-    700 of them would start a collection, every tenth of those a larger one, and some of
-    those scan the whole heap (everything the process holds, Numba's and NumPy's modules
-    included): that took as long as the rest of :func:`relate_objects` on 100 objects
-    (``benchmarks/bench_relate.py``). With the collector paused over the whole call (not
-    only the loop that builds the results) the lists made and freed inside it start none.
-    Nothing is left uncollected: the collector runs again, as before, once the call is
-    done. If it was disabled, it stays disabled.
-    """
-    enabled = gc.isenabled()
-    gc.disable()
-    try:
-        yield
-    finally:
-        if enabled:
-            gc.enable()
 
 
 def _words(decisions: PairDecisions) -> tuple[list[str | None], ...]:
@@ -275,13 +256,16 @@ def _verticals(
 @dataclass(frozen=True)
 class _Rows:
     """What :func:`_build` makes the results of: rows ``0..P-1`` are the pairs, ``P..2P-1``
-    the same pairs the other way round (lists of ``2P``, or arrays of ``P`` shared by both
-    rows of a pair, in the pairs' order)."""
+    the same pairs the other way round (lists or arrays of ``2P``, or arrays of ``P`` shared
+    by both rows of a pair, in the pairs' order)."""
 
-    #: The argument's and the referent's label of every row.
-    names: tuple[list[str], list[str]]
-    #: Kind, primary, secondary, hedge, secondary hedge of every row (:func:`_words`).
-    words: tuple[list[str | None], ...]
+    #: The labels (an object array of the strings), and the argument's and the referent's
+    #: object of every row.
+    names: tuple[NDArray[np.object_], NDArray[np.intp], NDArray[np.intp]]
+    #: The rule base's decision of every row (its words: :func:`_words`).
+    decisions: PairDecisions
+    #: The row at each place of the output.
+    order: NDArray[np.intp]
     #: The vertical word of every row, or None.
     vertical: list[str | None]
     #: Whether each pair's ``f2`` is the hybrid F02 (``P``).
@@ -298,11 +282,9 @@ class _Rows:
     histograms: tuple[NDArray[np.float64], ...]
 
 
-def _build(
-    rows: _Rows, order: list[int], templates: tuple[list[str], dict[str, str]]
-) -> list[tuple[Relation, PairHistograms]]:
-    """Each row's :class:`Relation` and :class:`PairHistograms`, in the output ``order`` (the
-    row at each place).
+def _build(rows: _Rows) -> list[tuple[Relation, PairHistograms]]:
+    """Each row's :class:`Relation` and :class:`PairHistograms`, in the output order
+    (``rows.order``); what :class:`~.related.RelatedPairs` makes on its first read.
 
     The objects are the ones ``Relation(...)`` and ``PairHistograms(...)`` make (the same
     fields, in the same order). A frozen dataclass' ``__init__`` sets each field through
@@ -312,8 +294,10 @@ def _build(
     them directly), then turned into the frozen classes by ``__class__`` assignment. The
     two rows of a pair hold the same float objects (turned: B's left is A's right).
     """
-    arguments, referents = rows.names
-    kinds, primaries, secondaries, hedges, sec_hedges = rows.words
+    table, argument, referent = rows.names
+    arguments, referents = table[argument].tolist(), table[referent].tolist()
+    kinds, primaries, secondaries, hedges, sec_hedges = _words(rows.decisions)
+    templates = sentence_templates(rows.decisions)
     horizontals, sentences = _sentences(arguments, referents, rows.vertical, templates)
     confidence, deviation, extends = (x.tolist() for x in rows.own)
     coverage, ov, rov = (x.tolist() for x in rows.pair)
@@ -362,7 +346,7 @@ def _build(
     for hist in hists:
         hist.__class__ = PairHistograms
     both = list(zip(rels, hists, strict=True))
-    return [both[r] for r in order]
+    return [both[r] for r in rows.order.tolist()]
 
 
 def _direction_dicts(x: NDArray[np.float64]) -> list[dict[str, float]]:
