@@ -171,6 +171,94 @@ def test_convex_chain_walk_with_level_runs_of_vertices(start: int) -> None:
         assert_close(got[k], ref)
 
 
+F0_F2 = [kernel.KernelSpec(0.0), kernel.KernelSpec(2.0)]
+
+
+@pytest.mark.parametrize(("n", "m", "directions"), [(150, 320, 180), (200, 200, 36), (400, 120, 8)])
+def test_f0_f2_of_large_stars_match_reference(n: int, m: int, directions: int) -> None:
+    """Regions of more than ``_table.BUCKET_SORT_FROM`` edges, F0 + F2 (the batched walk of
+    ``_batch``): more pairs in a direction than the first buffers hold (they grow), and at 8
+    directions so many inversions from one direction to the next that ``_order`` switches to
+    the bucket sort."""
+    rng = np.random.default_rng(n + m + directions)
+    a = forces.prepare(star(rng, n, np.zeros(2), 1.0), "a")
+    b = forces.prepare(star(rng, m, np.array([2.4, -0.9]), 1.3), "b")
+    got = kernel.sweep_pairs([a, b], [(0, 1), (1, 0)], F0_F2, directions)
+    with np.errstate(all="ignore"):
+        for k, (x, y) in enumerate([(a, b), (b, a)]):
+            assert_close(
+                got[k], _edge_pair_histograms(x, y, [_Kernel(0.0), _Kernel(2.0)], directions)
+            )
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    seed=st.integers(0, 2**31),
+    shift=st.tuples(st.floats(-1.2, 1.2), st.floats(-1.2, 1.2)),
+    directions=st.sampled_from([36, 180, 37]),
+)
+def test_f0_f2_of_overlapping_stars_match_reference(
+    seed: int, shift: tuple[float, float], directions: int
+) -> None:
+    """F0 + F2 of overlapping regions: the edge pairs that cross leave the vectorised loops of
+    ``_batch`` and are integrated one at a time, split at the crossing."""
+    rng = np.random.default_rng(seed)
+    a = forces.prepare(star(rng, int(rng.integers(3, 40)), np.zeros(2), 1.0), "a")
+    b = forces.prepare(star(rng, int(rng.integers(3, 40)), np.array(shift), 1.0), "b")
+    got = kernel.sweep_pairs([a, b], [(0, 1)], F0_F2, directions)[0]
+    with np.errstate(all="ignore"):
+        ref = _edge_pair_histograms(a, b, [_Kernel(0.0), _Kernel(2.0)], directions)
+    assert np.all(np.isfinite(ref))
+    assert_close(got, ref)
+
+
+def test_edge_pair_buffers_say_how_many_pairs_they_need() -> None:
+    """``collect_pairs`` into buffers too small returns minus the pairs needed; grown buffers
+    take them all, and the same pairs whatever the first size."""
+    from scenespeak.spatial.forces import _batch, _table
+
+    rng = np.random.default_rng(5)
+    a = forces.prepare(star(rng, 120, np.zeros(2), 1.0), "a")
+    b = forces.prepare(star(rng, 110, np.array([2.2, 0.7]), 1.0), "b")
+    pts, nxt, region_start, origin, _ = kernel._packed([a, b])
+    size = pts.shape[0]
+    srt = np.empty((size, 5))
+    scratch = (np.empty((size, 5)), np.arange(size), np.empty((2, 2)), srt, np.empty(size))
+    moves = np.full(2, -1, dtype=np.int64)
+    _table._tables(1.0, 0.0, pts, nxt, region_start, True, (*scratch, moves), np.ones(2, bool))
+    ranges = (0, int(region_start[1]), int(region_start[1]), size)
+    shift = (float(origin[1, 1] - origin[0, 1]), float(origin[1, 0] - origin[0, 0]))
+    small = _batch.scratch(8)
+    needed = _batch.collect_pairs(srt, ranges, shift, small[0])
+    assert needed < -8
+    big = _batch.grown(small, -needed)
+    n = _batch.collect_pairs(srt, ranges, shift, big[0])
+    assert n == -needed
+    roomy = _batch.scratch(10 * n)
+    assert _batch.collect_pairs(srt, ranges, shift, roomy[0]) == n
+    np.testing.assert_array_equal(big[0][:, :n], roomy[0][:, :n])
+
+
+def test_bucket_and_insertion_sort_give_the_same_order() -> None:
+    """``_order``'s two ways (bucket sort first, or insertion sort alone) leave the same order:
+    the stable sort of the previous one, ties included."""
+    from scenespeak.spatial.forces import _table
+
+    rng = np.random.default_rng(2)
+    n = 300
+    tab = np.zeros((n, 5))
+    tab[:, 0] = np.round(rng.uniform(0, 4, n), 1)  # many equal keys
+    previous = rng.permutation(n)
+    orders = []
+    for last_moves in (0, 10 * n):  # insertion alone; bucket sort first
+        perm = previous.copy()
+        moves = np.array([last_moves], dtype=np.int64)
+        _table._order(tab, perm, np.empty(n), (0, n), False, moves, 0)
+        orders.append(perm)
+    np.testing.assert_array_equal(orders[0], orders[1])
+    np.testing.assert_array_equal(orders[0], previous[np.argsort(tab[previous, 0], kind="stable")])
+
+
 def test_kernel_matches_reference_on_masks() -> None:
     shape = (256, 256)
     rng = np.random.default_rng(3)

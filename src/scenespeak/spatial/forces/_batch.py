@@ -7,20 +7,23 @@ finds every (edge of A, edge of B) pair whose ranges of lines overlap; each cont
 1999; ``docs/forces.md``). For F2 that is a divided difference of ``Ψ(u) = u - u log u``: two
 logarithms per pair, which dominated the star's time when the walk took them one pair at a time
 (``math.log`` is a call into libm that the compiler cannot vectorise). So the work is split in
-three loops:
+three loops, each without branches so that the compiler turns it into SIMD instructions:
 
-1. :func:`collect_gaps` walks the tables and writes each pair's end gaps ``|d0|, |d1|`` and
-   weight into the buffers of its side (θ where ``d > 0``, θ + π where ``d < 0``);
-2. :func:`_logs` takes the logarithms of a whole buffer at once, in a branch-free loop the
-   compiler turns into SIMD instructions (fdlibm's ``log``: reduction to ``[√2/2, √2)`` by the
-   exponent bits, then a polynomial in ``s = f / (2 + f)``; within 1 ulp of libm's);
-3. :func:`_sums` adds the pairs' F0 and F2 terms, also vectorised (the sums may be
-   reassociated: their order is not the walk's, which changes the last bits only).
+1. :func:`collect_pairs` walks the tables; for each edge of one region it finds the run of the
+   other's rows that it pairs with (two pointers), then writes each pair's signed end gaps
+   ``d0, d1`` and weight into the buffers in a counted loop (:func:`_fill`);
+2. :func:`_split_gaps` takes ``|d0|`` and ``|d1|`` apart into mantissa and exponent (their bits:
+   fdlibm's ``log`` reduces ``x = 2**k (1 + f)`` with ``1 + f`` in ``[√2/2, √2)``);
+3. :func:`_sums` finishes both logarithms (fdlibm's polynomial in ``s = f / (2 + f)``, within
+   1 ulp of libm's; the two divisions of a pair share one) and adds the pairs' F0 and F2 terms to
+   the side each serves (θ where ``d > 0``, θ + π where ``d < 0``) by selects; the sums may be
+   reassociated (their order is not the walk's, which changes the last bits only).
 
-A pair whose gap changes sign (its edges cross) or touches zero, or one that does not fit in the
-buffers, is integrated on the spot by :func:`f0_f2_terms` with ``math.log``. The buffers grow
-for the next direction when a direction overflowed them (:func:`grown`), so memory stays linear
-in the pairs that one direction holds.
+A pair whose gap changes sign (its edges cross) or touches zero (below :data:`TINY`) weighs
+nothing in those loops and is integrated afterwards by :func:`f0_f2_terms` with ``math.log``.
+When a direction has more pairs than the buffers hold, :func:`collect_pairs` says how many it
+needs and the caller grows them (:func:`grown`) and walks again, so memory stays linear in the
+pairs that one direction holds.
 """
 
 from __future__ import annotations
@@ -36,8 +39,6 @@ from scenespeak.spatial.forces._jit import jit, jit_inline, jit_reassoc
 TAYLOR_RATIO = 1e-3
 # Smallest normal double: gaps below it take the scalar path (_logs reads exponent bits).
 TINY = 2.2250738585072014e-308
-# Largest buffer (pairs per side and direction); pairs beyond it take the scalar path.
-MAX_CAPACITY = 1 << 18
 
 # fdlibm's e_log.c: ln 2 split in two, and the coefficients of log(1+f) in s = f / (2 + f).
 LN2_HI = 6.93147180369123816490e-01
@@ -52,6 +53,7 @@ LG7 = 1.479819860511658591e-01
 MANTISSA = 0x000FFFFFFFFFFFFF
 ONE_BITS = 0x3FF0000000000000
 SQRT2_BITS = 0x3FF6A09E667F3BCD
+ABS_MASK = 0x7FFFFFFFFFFFFFFF
 
 
 @jit
@@ -97,223 +99,233 @@ def f0_f2_terms(d0: float, d1: float, weight: float) -> tuple[float, float, floa
     return weight * (d0 * d0 + d0 * d1 + d1 * d1), weight * _mean_f2(d0, d1), 0.0, 0.0
 
 
-def scratch(capacity: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Buffers for ``capacity`` pairs per side: ``(gaps, logs, weights, bits)``.
+Buffers = tuple[np.ndarray, np.ndarray]
 
-    ``gaps[0:2]`` are the end gaps of the θ side's pairs, ``gaps[2:4]`` of the θ + π side's,
-    ``weights[0]`` and ``weights[1]`` their weights, ``logs`` the logarithms of ``gaps``,
-    ``bits`` the scratch of :func:`_logs`.
+
+def scratch(capacity: int) -> Buffers:
+    """Buffers for ``capacity`` pairs: ``(pairs, parts)``.
+
+    ``pairs[0:3]`` are the pairs' end gaps ``d0, d1`` and weights (:func:`collect_pairs`),
+    ``parts[0:4]`` the int64 mantissas and exponents of ``|d0|, |d1|`` (:func:`_split_gaps`).
     """
-    return (
-        np.empty((4, capacity)),
-        np.empty((4, capacity)),
-        np.empty((2, capacity)),
-        np.empty((2, capacity), dtype=np.int64),
-    )
+    return np.empty((3, capacity)), np.empty((4, capacity), dtype=np.int64)
 
 
 scratch_jit = jit(scratch)
 
 
 @jit
-def grown(
-    bufs: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray], missed: int
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Larger buffers when the last direction had ``missed`` pairs that did not fit."""
-    capacity = bufs[2].shape[1]
-    if missed == 0 or capacity >= MAX_CAPACITY:
+def grown(bufs: Buffers, needed: int) -> Buffers:
+    """``bufs``, or larger ones when a direction needs ``needed`` pairs (twice as many)."""
+    if needed <= bufs[0].shape[1]:
         return bufs
-    return scratch_jit(min(2 * capacity + missed, MAX_CAPACITY))
+    return scratch_jit(2 * needed)
 
 
 @jit_inline
-def _gap(
-    srt: np.ndarray, o: int, i: int, shift: tuple[float, float], case: int
-) -> tuple[float, float, float]:
-    """``(d0, d1, weight)`` of A-edge row ``e`` and B-edge row ``f`` (B shifted by ``shift =
-    (dvb, dsb)``; ``(e, f) = (o, i)`` in case 0, ``(i, o)`` in case 1): the gap at both ends of
-    their common range of lines and the pair's weight, 0 when the ranges do not overlap on a
-    positive length."""
-    dvb, dsb = shift
-    e = o if case == 0 else i
-    f = i if case == 0 else o
-    lo_a = srt[e, 0]
-    hi_a = srt[e, 1]
-    lo_b = srt[f, 0] + dvb
-    hi_b = srt[f, 1] + dvb
-    lo = lo_a if lo_a > lo_b else lo_b
-    hi = hi_a if hi_a < hi_b else hi_b
-    weight = (srt[e, 4] * srt[f, 4]) * (lo - hi) if hi > lo else 0.0
-    s_a = srt[e, 2]
-    k_a = srt[e, 3]
-    s_b = srt[f, 2] + dsb
-    k_b = srt[f, 3]
-    d0 = (s_a + k_a * (lo - lo_a)) - (s_b + k_b * (lo - lo_b))
-    d1 = (s_a + k_a * (hi - lo_a)) - (s_b + k_b * (hi - lo_b))
-    return d0, d1, weight
+def _fill(
+    srt: np.ndarray,
+    o: int,
+    inner: tuple[int, int],
+    offsets: tuple[float, float, float, float],
+    sgn: float,
+    pairs: np.ndarray,
+    n: int,
+) -> int:
+    """Pairs of row ``o`` with rows ``inner = (j0, j1)`` into ``pairs[:, n:]``; returns the new
+    ``n``. Row ``o`` is shifted by ``offsets[0:2]`` (``v``, ``s``), the inner rows by
+    ``offsets[2:4]``; ``sgn`` is +1 when ``o`` is an A-edge, -1 when it is a B-edge, so that the
+    gap is always ``s_A - s_B``. A pair that does not overlap on a positive length weighs 0.
+    The same floats as the pair-at-a-time walk (``_sweep._integrate``)."""
+    ov, os_, iv, is_ = offsets
+    lo_o = srt[o, 0] + ov
+    hi_o = srt[o, 1] + ov
+    s_o = srt[o, 2] + os_
+    k_o = srt[o, 3]
+    g_o = srt[o, 4]
+    d0s = pairs[0]
+    d1s = pairs[1]
+    ws = pairs[2]
+    for jj in range(inner[0], inner[1]):
+        lo_i = srt[jj, 0] + iv
+        hi_i = srt[jj, 1] + iv
+        s_i = srt[jj, 2] + is_
+        k_i = srt[jj, 3]
+        lo = lo_o if lo_o > lo_i else lo_i
+        hi = hi_o if hi_o < hi_i else hi_i
+        span = lo - hi
+        ws[n] = (g_o * srt[jj, 4]) * (span if span < 0.0 else 0.0)
+        d0s[n] = sgn * ((s_o + k_o * (lo - lo_o)) - (s_i + k_i * (lo - lo_i)))
+        d1s[n] = sgn * ((s_o + k_o * (hi - lo_o)) - (s_i + k_i * (hi - lo_i)))
+        n += 1
+    return n
 
 
 @jit
-def _scalar(d0: float, d1: float, weight: float, acc: np.ndarray) -> None:
-    """One pair integrated on the spot (:func:`f0_f2_terms`), added to ``acc``."""
-    x0, x2, y0, y2 = f0_f2_terms(d0, d1, weight)
-    acc[0] += x0
-    acc[1] += x2
-    acc[2] += y0
-    acc[3] += y2
-
-
-@jit_inline
-def _slot(
-    pair: tuple[float, float, float], cnt: tuple[int, int, int], capacity: int
-) -> tuple[int, int, tuple[int, int, int]]:
-    """Where pair ``(d0, d1, weight)`` goes: ``(row, n, counts)``, its side's first buffer row
-    (0 for θ, 2 for θ + π) and index, or row -1 when it is integrated on the spot (a gap that
-    changes sign or is below :data:`TINY`, full buffers), -2 when it weighs nothing; the counts
-    ``(θ side, θ + π side, did not fit)`` updated. Scalars only: arrays handed to a helper of
-    the inner loop are reference-counted at every pair."""
-    d0, d1, w = pair
-    n_pos, n_neg, missed = cnt
-    if w == 0.0:
-        return -2, 0, cnt
-    neg = d0 + d1 < 0.0
-    n = n_neg if neg else n_pos
-    if n >= capacity:
-        return -1, 0, (n_pos, n_neg, missed + 1)
-    if d0 * d1 > 0.0 and abs(d0) >= TINY and abs(d1) >= TINY:
-        return (2, n, (n_pos, n + 1, missed)) if neg else (0, n, (n + 1, n_neg, missed))
-    return -1, 0, cnt
-
-
-@jit_inline
-def _roles(
-    ranges: tuple[int, int, int, int], dvb: float, case: int
-) -> tuple[int, int, int, int, float, float]:
-    """``(outer rows, inner rows, their v offsets)`` of :func:`collect_gaps`'s case."""
-    a0, a1, b0, b1 = ranges
-    if case == 0:
-        return a0, a1, b0, b1, 0.0, dvb
-    return b0, b1, a0, a1, dvb, 0.0
-
-
-@jit_inline
-def _before(v: float, lo: float, case: int) -> bool:
-    """Whether an inner edge starting at ``v`` comes before an outer one starting at ``lo``
-    (case 0: ``v < lo``, case 1: ``v <= lo``; each pair of equal starts is taken once)."""
-    return v < lo or (case == 1 and v == lo)
-
-
-@jit
-def collect_gaps(
+def collect_pairs(
     srt: np.ndarray,
     ranges: tuple[int, int, int, int],
     shift: tuple[float, float],
-    bufs: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray],
-    counts: np.ndarray,
-    acc: np.ndarray,
-) -> None:
-    """Every overlapping edge pair of A (rows ``a0:a1``) and B (rows ``b0:b1``) into the
-    buffers of its side, by the two-pointer walk of ``_sweep._collect``; ``counts[0:2]`` the
-    pairs per side, ``counts[2]`` those that did not fit.
+    pairs: np.ndarray,
+) -> int:
+    """Every overlapping edge pair of A (rows ``a0:a1``) and B (rows ``b0:b1``, shifted by
+    ``shift = (dvb, dsb)``) into ``pairs``; returns their number, or minus the number needed
+    when ``pairs`` is too small (then its contents are of no use).
 
     Case 0: for each A-edge, the B-edges with ``lo_a <= lo_b < hi_a``; case 1: for each
-    B-edge, the A-edges with ``lo_b < lo_a < hi_b``: each pair once. A pair whose edges cross
-    or touch, with a gap below :data:`TINY`, or that does not fit, is integrated on the spot
-    (:func:`_scalar`). One loop body serves both cases.
+    B-edge, the A-edges with ``lo_b < lo_a < hi_b``: each pair once (two pointers over rows
+    sorted by ``lo``, as ``_sweep._collect``). One loop body serves both cases.
     """
+    a0, a1, b0, b1 = ranges
     dvb, dsb = shift
-    gaps = bufs[0]
-    weights = bufs[2]
-    capacity = weights.shape[1]
-    cnt = (0, 0, 0)
+    capacity = pairs.shape[1]
+    n = 0
+    needed = 0
     for case in range(2):
-        o0, o1, i0, i1, off_o, off_i = _roles(ranges, dvb, case)
+        o0, o1, i0, i1 = (a0, a1, b0, b1) if case == 0 else (b0, b1, a0, a1)
+        offsets = (0.0, 0.0, dvb, dsb) if case == 0 else (dvb, dsb, 0.0, 0.0)
+        sgn = 1.0 if case == 0 else -1.0
+        off_o = offsets[0]
+        off_i = offsets[2]
         j = i0
         for o in range(o0, o1):
             lo_o = srt[o, 0] + off_o
             hi_o = srt[o, 1] + off_o
-            while j < i1 and _before(srt[j, 0] + off_i, lo_o, case):
+            # Inner rows starting before this one (case 1: or with it) pair with it in the
+            # other case; each pair of equal starts is taken once.
+            while j < i1 and (
+                srt[j, 0] + off_i < lo_o or (case == 1 and srt[j, 0] + off_i == lo_o)
+            ):
                 j += 1
             if j == i1:
                 break  # every inner edge starts below this one, hence below the rest
-            jj = j
-            while jj < i1 and srt[jj, 0] + off_i < hi_o:
-                d0, d1, w = _gap(srt, o, jj, (dvb, dsb), case)
-                jj += 1
-                row, n, cnt = _slot((d0, d1, w), cnt, capacity)
-                if row >= 0:
-                    gaps[row, n] = abs(d0)
-                    gaps[row + 1, n] = abs(d1)
-                    weights[row // 2, n] = w
-                elif row == -1:
-                    _scalar(d0, d1, w, acc)
-    counts[0], counts[1], counts[2] = cnt
+            end = j
+            while end < i1 and srt[end, 0] + off_i < hi_o:
+                end += 1
+            needed += end - j
+            if needed <= capacity:
+                n = _fill(srt, o, (j, end), offsets, sgn, pairs, n)
+    return n if needed <= capacity else -needed
+
+
+@jit_inline
+def _usable(d0: float, d1: float) -> bool:
+    """Whether a pair goes through the vectorised loops: a gap of one sign, both ends at least
+    :data:`TINY` (bitwise ``&``: no branch)."""
+    return (d0 * d1 > 0.0) & (abs(d0) >= TINY) & (abs(d1) >= TINY)
+
+
+@jit_inline
+def _split(b: int) -> tuple[int, float]:
+    """fdlibm's reduction of the positive double with bits ``b``: the bits of ``1 + f`` in
+    ``[√2/2, √2)`` and the exponent ``k`` (``x = 2**k (1 + f)``)."""
+    mb = (b & MANTISSA) | ONE_BITS
+    big = mb > SQRT2_BITS
+    return (mb - (1 << 52) if big else mb), float((b >> 52) - 1023 + (1 if big else 0))
 
 
 @jit
-def _logs(x: np.ndarray, out: np.ndarray, n: int, bits: np.ndarray) -> None:
-    """``out[:n] = log(x[:n])`` for positive normal doubles, vectorisable (fdlibm ``e_log.c``:
-    ``x = 2**k (1 + f)`` with ``1 + f`` in ``[√2/2, √2)``, ``log(1 + f)`` from a polynomial
-    in ``s = f / (2 + f)``; error below 1 ulp). ``bits`` is int64 scratch of 2 rows."""
-    xb = x.view(np.int64)
-    mant = bits[0]
-    expo = bits[1].view(np.float64)
+def _split_gaps(pairs: np.ndarray, n: int, parts: np.ndarray) -> int:
+    """``parts[0:2]`` the bits of ``1 + f`` and ``parts[2:4]`` (as float64) the exponents of
+    ``|d0|`` and ``|d1|`` (of 1.0 for a pair that is not :func:`_usable`); returns the number
+    of pairs that are not."""
+    d0s = pairs[0]
+    d1s = pairs[1]
+    b0s = d0s.view(np.int64)
+    b1s = d1s.view(np.int64)
+    m0 = parts[0]
+    m1 = parts[1]
+    e0 = parts[2].view(np.float64)
+    e1 = parts[3].view(np.float64)
+    bad = 0
     for i in range(n):
-        b = xb[i]
-        mb = (b & MANTISSA) | ONE_BITS
-        big = mb > SQRT2_BITS
-        mant[i] = mb - (1 << 52) if big else mb
-        expo[i] = float((b >> 52) - 1023 + (1 if big else 0))
-    m = mant.view(np.float64)
-    for i in range(n):
-        f = m[i] - 1.0
-        s = f / (2.0 + f)
-        z = s * s
-        w = z * z
-        r = z * (LG1 + w * (LG3 + w * (LG5 + w * LG7))) + w * (LG2 + w * (LG4 + w * LG6))
-        hfsq = 0.5 * f * f
-        k = expo[i]
-        out[i] = k * LN2_HI - ((hfsq - (s * (hfsq + r) + k * LN2_LO)) - f)
+        ok = _usable(d0s[i], d1s[i])
+        m0[i], e0[i] = _split((b0s[i] & ABS_MASK) if ok else ONE_BITS)
+        m1[i], e1[i] = _split((b1s[i] & ABS_MASK) if ok else ONE_BITS)
+        bad += 0 if ok else 1
+    return bad
+
+
+@jit_inline
+def _log_poly(f: float, s: float, k: float) -> float:
+    """fdlibm's ``log(2**k (1 + f))`` given ``s = f / (2 + f)`` (``e_log.c``)."""
+    z = s * s
+    w = z * z
+    r = z * (LG1 + w * (LG3 + w * (LG5 + w * LG7))) + w * (LG2 + w * (LG4 + w * LG6))
+    hfsq = 0.5 * f * f
+    return k * LN2_HI - ((hfsq - (s * (hfsq + r) + k * LN2_LO)) - f)
 
 
 @jit_reassoc
-def _sums(
-    a0s: np.ndarray, a1s: np.ndarray, l0s: np.ndarray, l1s: np.ndarray, ws: np.ndarray, n: int
-) -> tuple[float, float]:
-    """``(Σ w (a0² + a0 a1 + a1²), Σ w mean Φ⁺)`` over one side's ``n`` pairs (F2:
-    :func:`_mean_f2` from the buffered logarithms; its Taylor branch as ``-(l0 + l1) / 2 -
-    x² / 12 - x⁴ / 64``, ``x = h / m``, which is ``-log m + x² / 24`` to O(x⁶))."""
-    t0 = 0.0
-    t2 = 0.0
+def _sums(pairs: np.ndarray, n: int, parts: np.ndarray) -> tuple[float, float, float, float]:
+    """``(Σ 6 F0, Σ F2)`` of the θ side, then of the θ + π side, over the :func:`_usable` pairs.
+
+    F0: ``w (a0² + a0 a1 + a1²)`` (six times the mean of ``u² / 2``); F2: :func:`_mean_f2`
+    from the logarithms of ``a0 = |d0|, a1 = |d1|``, its Taylor branch as ``-(l0 + l1) / 2 -
+    x² / 12 - x⁴ / 64``, ``x = h / m`` (``-log m + x² / 24`` to O(x⁶)). The two divisions of
+    fdlibm's ``s`` share one (``1 / ((2 + f0)(2 + f1))``), as do ``1 / h`` and ``1 / m``."""
+    d0s = pairs[0]
+    d1s = pairs[1]
+    ws = pairs[2]
+    m0 = parts[0].view(np.float64)
+    m1 = parts[1].view(np.float64)
+    e0 = parts[2].view(np.float64)
+    e1 = parts[3].view(np.float64)
+    p0 = 0.0
+    p2 = 0.0
+    q0 = 0.0
+    q2 = 0.0
     for i in range(n):
-        a0 = a0s[i]
-        a1 = a1s[i]
-        l0 = l0s[i]
-        l1 = l1s[i]
-        w = ws[i]
-        t0 += w * (a0 * a0 + a0 * a1 + a1 * a1)
+        d0 = d0s[i]
+        d1 = d1s[i]
+        ok = _usable(d0, d1)
+        a0 = abs(d0) if ok else 1.0
+        a1 = abs(d1) if ok else 1.0
+        w = ws[i] if ok else 0.0
+        f0 = m0[i] - 1.0
+        f1 = m1[i] - 1.0
+        inv = 1.0 / ((2.0 + f0) * (2.0 + f1))
+        l0 = _log_poly(f0, f0 * (2.0 + f1) * inv, e0[i])
+        l1 = _log_poly(f1, f1 * (2.0 + f0) * inv, e1[i])
+        t0 = w * (a0 * a0 + a0 * a1 + a1 * a1)
         h = a1 - a0
         m = 0.5 * (a0 + a1)
-        dd = ((a1 - a1 * l1) - (a0 - a0 * l0)) / h
-        x = h / m
+        taylor = abs(h) <= TAYLOR_RATIO * m
+        hh = m if taylor else h
+        inv_hm = 1.0 / (hh * m)
+        dd = ((a1 - a1 * l1) - (a0 - a0 * l0)) * (m * inv_hm)
+        x = h * (hh * inv_hm)
         xx = x * x
         tay = -0.5 * (l0 + l1) - xx * (1.0 / 12.0 + xx / 64.0)
-        t2 += w * (tay if abs(h) <= TAYLOR_RATIO * m else dd)
-    return t0, t2
+        t2 = w * (tay if taylor else dd)
+        neg = d0 + d1 < 0.0
+        p0 += 0.0 if neg else t0
+        p2 += 0.0 if neg else t2
+        q0 += t0 if neg else 0.0
+        q2 += t2 if neg else 0.0
+    return p0, p2, q0, q2
 
 
 @jit
-def integrate_gaps(
-    bufs: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray], counts: np.ndarray, acc: np.ndarray
-) -> None:
-    """Add the buffered pairs' F0 and F2 terms to ``acc`` (θ: ``acc[0:2]``, θ + π: ``acc[2:4]``)."""
-    gaps, logs, weights, bits = bufs
-    for side in range(2):
-        n = counts[side]
-        _logs(gaps[2 * side], logs[2 * side], n, bits)
-        _logs(gaps[2 * side + 1], logs[2 * side + 1], n, bits)
-        t0, t2 = _sums(
-            gaps[2 * side], gaps[2 * side + 1], logs[2 * side], logs[2 * side + 1], weights[side], n
-        )
-        acc[2 * side] += t0
-        acc[2 * side + 1] += t2
+def integrate_pairs(bufs: Buffers, n: int, acc: np.ndarray) -> None:
+    """Add the ``n`` collected pairs' F0 (times 6) and F2 terms to ``acc`` (θ: ``acc[0:2]``,
+    θ + π: ``acc[2:4]``); the pairs that are not :func:`_usable` one at a time."""
+    pairs, parts = bufs
+    bad = _split_gaps(pairs, n, parts)
+    p0, p2, q0, q2 = _sums(pairs, n, parts)
+    acc[0] += p0
+    acc[1] += p2
+    acc[2] += q0
+    acc[3] += q2
+    if bad == 0:
+        return
+    for i in range(n):
+        d0 = pairs[0, i]
+        d1 = pairs[1, i]
+        w = pairs[2, i]
+        if w != 0.0 and not _usable(d0, d1):
+            x0, x2, y0, y2 = f0_f2_terms(d0, d1, w)
+            acc[0] += x0
+            acc[1] += x2
+            acc[2] += y0
+            acc[3] += y2

@@ -31,9 +31,10 @@ from typing import TypeVar
 import numpy as np
 
 from scenespeak.spatial.forces._batch import (
-    collect_gaps,
+    Buffers,
+    collect_pairs,
     grown,
-    integrate_gaps,
+    integrate_pairs,
     scratch_jit,
 )
 from scenespeak.spatial.forces._batch import (
@@ -227,22 +228,23 @@ def _walk_f0_f2(
     srt: np.ndarray,
     ranges: tuple[int, int, int, int],
     shift: tuple[float, float],
-    bufs: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray],
-    work: tuple[np.ndarray, np.ndarray],
-) -> int:
-    """F0 and F2 of one pair in one direction into ``work[1]`` = ``(F0(θ), F2(θ), F0(θ + π),
+    bufs: Buffers,
+    acc: np.ndarray,
+) -> Buffers:
+    """F0 and F2 of one pair in one direction into ``acc`` = ``(F0(θ), F2(θ), F0(θ + π),
     F2(θ + π))``: :func:`_collect`'s two-pointer walk over the sorted rows ``a0:a1, b0:b1 =
-    ranges``, the edge pairs in batches (:mod:`~scenespeak.spatial.forces._batch`: their
-    logarithms vectorised). Returns the number of pairs that did not fit in ``bufs``.
+    ranges``, the edge pairs in batches (:mod:`~scenespeak.spatial.forces._batch`: branch-free,
+    their logarithms vectorised). Returns the buffers, grown when this direction needed more.
     """
-    counts, acc = work
-    counts[:] = 0
+    n = collect_pairs(srt, ranges, shift, bufs[0])
+    if n < 0:
+        bufs = grown(bufs, -n)
+        n = collect_pairs(srt, ranges, shift, bufs[0])
     acc[:] = 0.0
-    collect_gaps(srt, ranges, shift, bufs, counts, acc)
-    integrate_gaps(bufs, counts, acc)
+    integrate_pairs(bufs, n, acc)
     acc[0] /= 6.0
     acc[2] /= 6.0
-    return counts[2]
+    return bufs
 
 
 @jit
@@ -322,6 +324,7 @@ def sweep(
     extent = np.empty((region_start.size - 1, 2))
     srt = np.empty((pts.shape[0], 5))
     keys = np.empty(pts.shape[0])
+    moves = np.full(region_start.size - 1, -1, dtype=np.int64)  # _order's
     buf = np.empty((1024, 2), dtype=np.int64)
     acc = np.empty((2, n_k))
     # F0 + F2 (what every caller of f0_f2_pairs and force_histograms() asks for): fused walk.
@@ -331,12 +334,12 @@ def sweep(
     scratch = chain_scratch(region_start)  # walk_convex's
     # _walk_f0_f2's buffers (grown when a direction has more edge pairs) and sums.
     bufs = scratch_jit(16 * np.diff(region_start).max() + 64)
-    work = (np.zeros(3, dtype=np.int64), np.zeros(4))
+    sums = np.zeros(4)
     for d in range(half):
         theta = 2.0 * math.pi * d / directions
         c = math.cos(theta)
         s = math.sin(theta)
-        _tables(c, s, pts, nxt, region_start, d == 0, (tab, perm, extent, srt, keys), table)
+        _tables(c, s, pts, nxt, region_start, d == 0, (tab, perm, extent, srt, keys, moves), table)
         track_extremes((c, s), pts, region_start, chained, (low_high, extent), d == 0)
         for p in range(n_pairs):
             ga = pair_a[p]
@@ -364,13 +367,12 @@ def sweep(
                     out[p, 1, d + half] += q2
                 continue
             if fast:
-                missed = _walk_f0_f2(srt, (a0, a1, b0, b1), (dvb, ox * c + oy * s), bufs, work)
-                bufs = grown(bufs, missed)
-                out[p, 0, d] += work[1][0]
-                out[p, 1, d] += work[1][1]
+                bufs = _walk_f0_f2(srt, (a0, a1, b0, b1), (dvb, ox * c + oy * s), bufs, sums)
+                out[p, 0, d] += sums[0]
+                out[p, 1, d] += sums[1]
                 if both:
-                    out[p, 0, d + half] += work[1][2]
-                    out[p, 1, d + half] += work[1][3]
+                    out[p, 0, d + half] += sums[2]
+                    out[p, 1, d + half] += sums[3]
                 continue
             count = _collect(srt, a0, a1, b0, b1, dvb, buf)
             if count < 0:

@@ -14,8 +14,12 @@ import numpy as np
 
 from scenespeak.spatial.forces._jit import jit
 
-# Regions with more edges than this are bucket-sorted before the insertion sort (_order).
+# Regions with more edges than this are projected into ``tab`` and ordered by _order; the
+# smaller ones are projected in place (_rows, _insertion_rows).
 BUCKET_SORT_FROM = 96
+# _order bucket-sorts a region before the insertion sort when its last insertion sort alone
+# moved more than this many keys per edge (star 200 + 200 at 180 directions: about 1).
+BUCKET_MOVES = 4
 
 
 @jit
@@ -97,29 +101,9 @@ def _bucket(tab: np.ndarray, perm: np.ndarray, keys: np.ndarray, lo_g: int, hi_g
 
 
 @jit
-def _order(
-    tab: np.ndarray, perm: np.ndarray, keys: np.ndarray, lo_g: int, hi_g: int, first: bool
-) -> None:
-    """Keep ``perm[lo_g:hi_g]`` sorted by ``v_lo``: a full sort the first time, then insertion
-    sort from the previous direction's order (few inversions between neighbours), on the
-    keys copied contiguous so that the shifts read and write neighbouring memory.
-
-    Over half a turn every pair of vertices swaps once, so insertion sort alone costs
-    ``n² / 2`` moves per region; above :data:`BUCKET_SORT_FROM` edges the previous order is
-    first distributed into ``n`` buckets of equal ``v`` width (:func:`_bucket`), which leaves
-    only the few inversions inside each bucket: linear time per direction for outlines of
-    thousands of vertices (traced masks).
-    """
-    if first:
-        order = np.argsort(tab[lo_g:hi_g, 0])
-        for j in range(hi_g - lo_g):
-            perm[lo_g + j] = lo_g + order[j]
-        return
-    if hi_g - lo_g > BUCKET_SORT_FROM:
-        _bucket(tab, perm, keys, lo_g, hi_g)  # leaves the keys in perm's new order
-    else:
-        for j in range(lo_g, hi_g):
-            keys[j] = tab[perm[j], 0]
+def _insertion(perm: np.ndarray, keys: np.ndarray, lo_g: int, hi_g: int) -> int:
+    """Insertion sort of ``keys[lo_g:hi_g]``, ``perm`` with them; returns the keys moved."""
+    moved = 0
     for j in range(lo_g + 1, hi_g):
         kv = keys[j]
         if keys[j - 1] <= kv:
@@ -130,8 +114,49 @@ def _order(
             perm[i + 1] = perm[i]
             keys[i + 1] = keys[i]
             i -= 1
+        moved += j - 1 - i
         perm[i + 1] = key
         keys[i + 1] = kv
+    return moved
+
+
+@jit
+def _order(
+    tab: np.ndarray,
+    perm: np.ndarray,
+    keys: np.ndarray,
+    span: tuple[int, int],
+    first: bool,
+    moves: np.ndarray,
+    g: int,
+) -> None:
+    """Keep ``perm[lo_g:hi_g]`` (``span``) sorted by ``v_lo``: a full sort the first time, then
+    insertion sort from the previous direction's order (few inversions between neighbours), on
+    the keys copied contiguous so that the shifts read and write neighbouring memory.
+
+    Over half a turn every pair of vertices swaps once, so insertion sort alone costs ``n² / 2``
+    moves per region over the half turn: few per direction for outlines of a few hundred
+    vertices, many for traced masks of thousands. So the moves of region ``g``'s last plain
+    insertion sort are kept in ``moves[g]`` (-1 before the first), and when they exceed
+    :data:`BUCKET_MOVES` per edge the previous order is first distributed into ``n`` buckets of
+    equal ``v`` width (:func:`_bucket`), which leaves only the few inversions inside each
+    bucket: linear time per direction. Both give the same order (the stable sort of the
+    previous order), so the choice changes the time only.
+    """
+    lo_g, hi_g = span
+    if first:
+        order = np.argsort(tab[lo_g:hi_g, 0])
+        for j in range(hi_g - lo_g):
+            perm[lo_g + j] = lo_g + order[j]
+        moves[g] = -1
+        return
+    if moves[g] > BUCKET_MOVES * (hi_g - lo_g):
+        _bucket(tab, perm, keys, lo_g, hi_g)  # leaves the keys in perm's new order
+        _insertion(perm, keys, lo_g, hi_g)
+        return
+    for j in range(lo_g, hi_g):
+        keys[j] = tab[perm[j], 0]
+    moves[g] = _insertion(perm, keys, lo_g, hi_g)
 
 
 @jit
@@ -192,19 +217,20 @@ def _tables(
     nxt: np.ndarray,
     region_start: np.ndarray,
     first: bool,
-    scratch: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+    scratch: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray],
     needed: np.ndarray,
 ) -> None:
     """Every region's edge table for direction (c, s), each sorted by the edge's ``v_lo``.
 
-    ``scratch`` is ``(tab, perm, extent, srt, keys)``: ``tab`` the rows of :func:`_project`,
-    ``perm`` each region's edges by ``v_lo``, ``extent[g]`` region g's range of ``v``,
-    ``srt[j] = tab[perm[j]]`` (the rows in sorted order, contiguous), ``keys`` scratch.
+    ``scratch`` is ``(tab, perm, extent, srt, keys, moves)``: ``tab`` the rows of
+    :func:`_project`, ``perm`` each region's edges by ``v_lo``, ``extent[g]`` region g's range of
+    ``v``, ``srt[j] = tab[perm[j]]`` (the rows in sorted order, contiguous), ``keys`` scratch,
+    ``moves`` :func:`_order`'s record of each region's last insertion sort.
     Regions of at most :data:`BUCKET_SORT_FROM` edges skip ``tab``: their rows are projected
     in the previous order and moved into place (:func:`_rows`, :func:`_insertion_rows`).
     Regions with ``needed[g]`` False (only in convex chain walks) are left alone.
     """
-    tab, perm, extent, srt, keys = scratch
+    tab, perm, extent, srt, keys, moves = scratch
     for g in range(region_start.size - 1):
         if not needed[g]:
             continue
@@ -219,8 +245,11 @@ def _tables(
             _insertion_rows(srt, perm, lo_g, hi_g)
             continue
         extent[g, 0], extent[g, 1] = _project(c, s, pts, nxt, lo_g, hi_g, tab)
-        _order(tab, perm, keys, lo_g, hi_g, first)
+        _order(tab, perm, keys, (lo_g, hi_g), first, moves, g)
         for j in range(lo_g, hi_g):
             e = perm[j]
-            for q in range(5):
-                srt[j, q] = tab[e, q]
+            srt[j, 0] = tab[e, 0]
+            srt[j, 1] = tab[e, 1]
+            srt[j, 2] = tab[e, 2]
+            srt[j, 3] = tab[e, 3]
+            srt[j, 4] = tab[e, 4]
