@@ -155,7 +155,7 @@ def stereo_stage(
     geometry = None
     if len(result.points.xyz):  # else the chain stops with _no_matches_error
         with timed(timings, "geometry"):
-            geometry = geometry_for((left.shape[0], left.shape[1]), result, opts[1])
+            geometry = geometry_for((left.shape[0], left.shape[1]), result, opts[1], left)
     return StereoStage(feats_r, result, geometry)
 
 

@@ -11,6 +11,7 @@ from scenespeak.perception.regions import (
     Segments,
     clean_disparity,
     name_segments,
+    plain_background,
     segment,
     support_plane,
 )
@@ -132,3 +133,71 @@ def test_votes_name_a_segment_only_when_they_agree_in_scale_and_orientation() ->
     assert vote_segments(seg, xy, matched, names, set(), opts, frozenset(), scatter) == []
     # without the labelling's match geometry the votes alone decide (as before)
     assert vote_segments(seg, xy, matched, names, set(), opts) == [(0, "cereal", 12, -1)]
+
+
+def _smeared_row_scene() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Two textured boxes 1 m away on one image row, with the plain floor between them at
+    their depth (what SGBM carries into a plain region from the texture beside it), and a
+    plain box face closed by its edges."""
+    rng = np.random.default_rng(5)
+    h, w = 80, 160
+    gray = np.full((h, w), 120, np.uint8)  # a rendered plain floor: exactly one gray level
+    gray[20:60, 10:40] = rng.integers(0, 255, (40, 30))
+    gray[20:60, 110:140] = rng.integers(0, 255, (40, 30))
+    gray[64:76, 60:90] = 200  # a plain face (no texture inside, edges all round)
+    z = np.full((h, w), np.nan)
+    z[20:60, 10:140] = 1.0  # both boxes and the floor between them
+    z[64:76, 60:90] = 1.2
+    heights = np.where(np.isfinite(z), 0.0, np.nan)
+    heights[20:60, 10:140] = np.linspace(0.3, 0.02, 40)[:, None]
+    heights[64:76, 60:90] = 0.1
+    return gray, z, heights
+
+
+def test_the_plain_floor_between_two_boxes_does_not_join_them() -> None:
+    gray, z, heights = _smeared_row_scene()
+    opts = RegionOptions(min_pixels=20, opening=1)
+    joined = segment(z, heights, 0.0, opts)
+    assert joined.labels[40, 20] == joined.labels[40, 120] >= 0  # without: one segment
+    bg = plain_background(gray, opts)
+    assert bg[40, 75] and not bg[40, 20] and not bg[70, 75]
+    seg = segment(z, heights, 0.0, opts, bg)
+    left, right = int(seg.labels[40, 20]), int(seg.labels[40, 120])
+    assert left >= 0 and right >= 0 and left != right
+    assert seg.labels[40, 75] == -1  # the floor between them belongs to neither
+    assert seg.labels[70, 75] >= 0  # the plain face inside its edges is kept
+
+
+def test_plain_background_is_off_for_a_noisy_camera_and_at_zero() -> None:
+    gray, _z, _h = _smeared_row_scene()
+    noisy = np.clip(gray + np.random.default_rng(0).normal(0, 2, gray.shape), 0, 255)
+    assert not plain_background(noisy.astype(np.uint8)).any()  # noise is texture
+    assert not plain_background(gray, RegionOptions(min_texture=0.0)).any()
+    assert plain_background(gray, stride=2).shape == (40, 80)
+
+
+def test_a_detections_grown_outline_takes_no_segment_at_another_depth() -> None:
+    """A crate's grown outline reached over the cube behind it on tuning-40, so the cube was
+    never reported; only the outline's pixels at the crate's depth are the crate's."""
+    from types import SimpleNamespace
+    from typing import Any
+
+    from scenespeak.perception.scene_regions import _taken
+
+    h, w = 40, 60
+    points = np.full((h, w, 3), np.nan, np.float32)
+    points[10:30, 5:30, 2] = 1.0  # the detected crate
+    points[10:30, 32:50, 2] = 1.6  # a cube behind it, inside the crate's grown outline
+    above = np.isfinite(points[..., 2])
+    outline = np.zeros((h, w), bool)
+    outline[5:35, 0:55] = True
+    work: Any = SimpleNamespace(
+        outlines=[outline],
+        own=[np.array([[0.0, 0.0, 1.0], [0.05, 0.0, 1.02]])],
+        geo=SimpleNamespace(points=points),
+        opts=RegionStageOptions(),
+    )
+    taken = _taken(work, 0, None, above)
+    assert taken[20, 10] and not taken[20, 40]
+    work.own = [np.zeros((0, 3))]  # without keypoint depth the whole outline, as before
+    assert _taken(work, 0, None, above)[20, 40]

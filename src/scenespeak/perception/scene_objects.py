@@ -120,19 +120,24 @@ def scene_objects(
 
 
 def geometry_for(
-    shape: tuple[int, int], result: StereoResult, strategy: StrategyOptions
+    shape: tuple[int, int],
+    result: StereoResult,
+    strategy: StrategyOptions,
+    image: NDArray[np.generic] | None = None,
 ) -> SceneGeometry | None:
     """The support plane and segments :func:`scene_objects` will use with this strategy (None
     when it uses none): they need the stereo stage only, not the labels, so the pipeline
-    computes them in its stereo thread while this one labels (the same call as
-    :func:`scenespeak.perception.scene_regions.objects_from_regions` makes)."""
+    computes them in its stereo thread while this one labels (the call
+    :func:`scenespeak.perception.scene_regions.objects_from_regions` makes, plus the left
+    ``image`` whose plain background takes part in no segment)."""
     resampled = bool(result.rect.needs_resampling)
     if result.dense is None or not strategy.uses_geometry(dense_map=True, resampled=resampled):
         return None
     from scenespeak.perception.scene_regions import RegionStageOptions, scene_geometry
 
     up = np.asarray(result.rect.rig.up, dtype=np.float64)
-    return scene_geometry(result.dense, up, (shape[0], shape[1]), RegionStageOptions().regions)
+    regions = RegionStageOptions().regions
+    return scene_geometry(result.dense, up, (shape[0], shape[1]), regions, image=image)
 
 
 def _geometry_objects(

@@ -183,16 +183,19 @@ def unknown_segments(
     up: NDArray[np.float64],
     opts: RegionStageOptions,
     kw: dict[str, Any],
+    min_keypoints: int | None = None,
 ) -> list[SceneObject]:
-    """Segments no detection holds, as unknown objects (left to right)."""
+    """Segments no detection holds, as unknown objects (left to right); a segment needs
+    ``min_keypoints`` SIFT keypoints (None: ``opts.unknown_min_keypoints``)."""
     out: list[tuple[float, SceneObject]] = []
     h, w = segments.labels.shape
     c = np.clip(np.rint(keypoints_xy[:, 0]).astype(np.intp), 0, w - 1)
     r = np.clip(np.rint(keypoints_xy[:, 1]).astype(np.intp), 0, h - 1)
     hit = segments.labels[r, c]
     n_kp = np.bincount(hit[hit >= 0], minlength=len(segments.sizes))
+    need = opts.unknown_min_keypoints if min_keypoints is None else min_keypoints
     for k, size in enumerate(segments.sizes.tolist()):
-        if k in claimed or size < opts.unknown_min_pixels or n_kp[k] < opts.unknown_min_keypoints:
+        if k in claimed or size < opts.unknown_min_pixels or n_kp[k] < need:
             continue
         pts = points[segments.mask(k)].astype(np.float64)
         pts = pts[np.all(np.isfinite(pts), axis=1)]
