@@ -507,3 +507,40 @@ def test_plain_dense_margin_is_not_the_pipelines() -> None:
     assert not PointsOptions().dense_crop
     staged = PointsOptions.with_overrides(None, StereoOptions().keywords())
     assert staged.dense_crop and staged.dense_margin == DENSE_MARGIN == 16
+
+
+def _brute_band_pairs(
+    dl: np.ndarray, dr: np.ndarray, lrect: np.ndarray, rrect: np.ndarray, band: float, lo: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Every in-band pair with positive disparity, by the full integer distance matrix, in
+    the order (left row rank, right row rank), distances as float32 of the exact value."""
+    rank_l = np.argsort(np.argsort(lrect[:, 1], kind="stable"), kind="stable")
+    rank_r = np.argsort(np.argsort(rrect[:, 1], kind="stable"), kind="stable")
+    ii, jj = np.nonzero(
+        (np.abs(lrect[:, 1, None] - rrect[None, :, 1]) <= band)
+        & (lrect[:, 0, None] - rrect[None, :, 0] > lo)
+    )
+    order = np.lexsort((rank_r[jj], rank_l[ii]))
+    ii, jj = ii[order], jj[order]
+    diff = dl[ii].astype(np.int64) - dr[jj].astype(np.int64)
+    sq = (diff * diff).sum(1)
+    return ii, jj, np.sqrt(sq.astype(np.float32))
+
+
+@pytest.mark.parametrize("chunk", [256, 5])
+def test_band_pairs_are_every_in_band_pair_with_its_exact_distance(chunk: int) -> None:
+    from scenespeak.perception.stereo.matching import _band_pairs
+
+    rng = np.random.default_rng(16)
+    dl = rng.integers(0, 256, (300, 128)).astype(np.uint8)
+    dr = rng.integers(0, 256, (280, 128)).astype(np.uint8)
+    dr[:40] = dl[:40]  # equal descriptors: distance 0
+    dr[40:60] = dr[60:80]  # ties: two right keypoints at the same distance of every left one
+    lrect = np.c_[rng.uniform(0, 80, 300), np.round(rng.uniform(0, 40, 300) * 4) / 4]
+    rrect = np.c_[rng.uniform(0, 80, 280), np.round(rng.uniform(0, 40, 280) * 4) / 4]
+    got = _band_pairs(dl, dr, lrect, rrect, 1.5, 0.0, None, chunk)
+    want = _brute_band_pairs(dl, dr, lrect, rrect, 1.5, 0.0)
+    assert len(want[0]) > 1000  # rows on quarter pixels: many pairs exactly 1.5 rows apart
+    for g, w in zip(got, want, strict=True):
+        assert g.dtype == w.dtype or g.dtype.kind == w.dtype.kind == "i"
+        np.testing.assert_array_equal(g, w)

@@ -100,8 +100,8 @@ def _global_block(
 
 
 def _band_pairs(
-    dl: NDArray[np.float32],
-    dr: NDArray[np.float32],
+    dl: NDArray[np.uint8],
+    dr: NDArray[np.uint8],
     lrect: NDArray[np.float64],
     rrect: NDArray[np.float64],
     band_px: float,
@@ -111,40 +111,47 @@ def _band_pairs(
 ) -> tuple[NDArray[np.intp], NDArray[np.intp], NDArray[np.float32]]:
     """All (left, right, distance) pairs inside the epipolar band and disparity range.
 
-    Left keypoints are taken in row order in blocks; each block is compared only with the right
-    keypoints in its band of rows (a slice of the row-sorted right keypoints), so the cost is a
-    fraction of the full distance matrix.
+    Left keypoints are taken in row order; each is compared only with the right keypoints in
+    its band of rows (a run of the row-sorted right keypoints, within the run of its block of
+    ``chunk`` left keypoints), and a descriptor distance is computed only for the pairs that
+    pass the band and disparity tests, in integers from the uint8 descriptors. The pairs come
+    in the order of the blocked float32 distance matrix this replaced (left in row order, then
+    right in row order) with the same float32 distances: for whole numbers in 0..255 every
+    partial sum of ``|l|² + |r|² - 2 l·r`` is a whole number below 2**24, which float32 holds
+    exactly in any order (issue 16, session 7: 5-7x less time on the real pairs).
     """
     nl = len(dl)
     lo_order = np.argsort(lrect[:, 1], kind="stable")
     ro = np.argsort(rrect[:, 1], kind="stable")
     ry = rrect[ro, 1]
-    drs = dr[ro]
-    rns = (drs * drs).sum(1)
-    pi: list[NDArray[np.intp]] = []
-    pj: list[NDArray[np.intp]] = []
-    pd: list[NDArray[np.float32]] = []
+    ly = lrect[lo_order, 1]
+    # each left keypoint's run of right keypoints: inside its block's run (the blocks' rows
+    # as before), and a little wider than the band (the exact test below decides)
+    first = np.empty(nl, np.intp)
+    last = np.empty(nl, np.intp)
     for s in range(0, nl, chunk):
-        li = lo_order[s : s + chunk]
-        ly = lrect[li, 1]
-        a = int(np.searchsorted(ry, ly.min() - band_px, "left"))
-        b = int(np.searchsorted(ry, ly.max() + band_px, "right"))
-        if b <= a:
-            continue
-        q = dl[li]
-        sq = (q * q).sum(1)[:, None] + rns[None, a:b] - 2.0 * (q @ drs[a:b].T)
-        ok = np.abs(ly[:, None] - ry[None, a:b]) <= band_px
-        dsp = lrect[li, 0][:, None] - rrect[ro[a:b], 0][None, :]
-        ok &= dsp > lo_disp
-        if hi_disp is not None:
-            ok &= dsp <= hi_disp
-        ii, jj = np.nonzero(ok)
-        pi.append(li[ii])
-        pj.append(ro[a + jj])
-        pd.append(np.sqrt(np.maximum(sq[ii, jj], 0.0)).astype(np.float32))
-    if not pi:
-        return np.zeros(0, np.intp), np.zeros(0, np.intp), np.zeros(0, np.float32)
-    return np.concatenate(pi), np.concatenate(pj), np.concatenate(pd)
+        lyc = ly[s : s + chunk]
+        first[s : s + chunk] = int(np.searchsorted(ry, lyc.min() - band_px, "left"))
+        last[s : s + chunk] = int(np.searchsorted(ry, lyc.max() + band_px, "right"))
+    wide = band_px + 0.5  # more than any rounding of the test below
+    np.maximum(first, np.searchsorted(ry, ly - wide, "left"), out=first)
+    np.minimum(last, np.searchsorted(ry, ly + wide, "right"), out=last)
+    count = np.maximum(last - first, 0)
+    total = int(count.sum())
+    pos = np.arange(total) - np.repeat(np.cumsum(count) - count, count)
+    li = np.repeat(lo_order, count)
+    rj = ro[np.repeat(first, count) + pos]
+    ok = np.abs(lrect[li, 1] - rrect[rj, 1]) <= band_px
+    dsp = lrect[li, 0] - rrect[rj, 0]
+    ok &= dsp > lo_disp
+    if hi_disp is not None:
+        ok &= dsp <= hi_disp
+    li, rj = li[ok], rj[ok]
+    norm_l = np.einsum("ij,ij->i", dl, dl, dtype=np.int32)
+    norm_r = np.einsum("ij,ij->i", dr, dr, dtype=np.int32)
+    dot = np.einsum("ij,ij->i", dl[li], dr[rj], dtype=np.int32)
+    sq = norm_l[li] + norm_r[rj] - 2 * dot
+    return li, rj, np.sqrt(sq.astype(np.float32))
 
 
 def _candidates(
@@ -189,8 +196,8 @@ def _candidates(
             g_back[better] = cmin[better] + s
     doffs = rect.doffs
     bi, bj, bd = _band_pairs(
-        dl,
-        dr,
+        fl.descriptors,
+        fr.descriptors,
         lrect,
         rrect,
         band_px,
