@@ -173,14 +173,14 @@ def _candidates(
     lrect = rect.rectify_points(fl.xy, "left")
     rrect = rect.rectify_points(fr.xy, "right")
     nl, nr = len(fl), len(fr)
-    dl = fl.descriptors.astype(np.float32)
-    dr = fr.descriptors.astype(np.float32)
     g_best = np.zeros(nl, np.intp)
     g_d1 = np.full(nl, np.inf, np.float32)
     g_d2 = np.full(nl, np.inf, np.float32)
     col_g = np.full(nr, np.inf, np.float32)
     g_back = np.zeros(nr, np.intp)
     if need_global:
+        dl = fl.descriptors.astype(np.float32)
+        dr = fr.descriptors.astype(np.float32)
         rn = (dr * dr).sum(1)
         k = min(4, nr)
         for s in range(0, nl, _CHUNK):
