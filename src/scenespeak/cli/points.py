@@ -111,9 +111,12 @@ def _stereo_points(
     :func:`~scenespeak.perception.plausibility.check_pair_order` (swapped or unrelated images,
     a calibration that does not fit) matches the stage's features instead of running SIFT on
     both images a second time (issue 16, session 6: that was about half of the command's
-    time), in the second thread while this one matches and runs SGBM; when it refuses the
-    pair, its error is the one raised, as when it ran first. The points are those of the
-    command before (``benchmarks/points_golden.py``).
+    time); it runs before the stage (its refusal comes first, as when it ran first), not in
+    the second thread beside it as in session 6: OpenCV runs a ``parallel_for_`` that starts
+    while another one is under way serially, so the dense map's SGBM, which started while the
+    check's matcher ran, took one core instead of two (``benchmarks/points_timeline.py``,
+    issue 16 session 7). The points are those of the command before
+    (``benchmarks/points_golden.py``).
     """
     from concurrent.futures import ThreadPoolExecutor
 
@@ -126,33 +129,30 @@ def _stereo_points(
     names = (str(sources[0]), str(sources[1]))
     stereo.check_pair(left, right, rig, left_name=names[0], right_name=names[1])
     rect = rectify(rig)
-    with single_threaded_blas(), ThreadPoolExecutor(max_workers=1) as pool:
-        gray_right = to_gray(right)
-        future = pool.submit(detect, gray_right, precise_upscale=False)
-        gray_left = to_gray(left)
-        features_left = detect(gray_left, precise_upscale=False)
-        features_right = future.result()
-        # the pair-order check needs only the features: the worker thread runs it while this
-        # one matches and computes the dense map; its refusal comes first, as before
-        check = pool.submit(
-            plausibility.check_pair_order, gray_left, gray_right, rig, names=names, rect=rect,
+    with single_threaded_blas():
+        with ThreadPoolExecutor(max_workers=1) as pool:
+            gray_right = to_gray(right)
+            future = pool.submit(detect, gray_right, precise_upscale=False)
+            gray_left = to_gray(left)
+            features_left = detect(gray_left, precise_upscale=False)
+            features_right = future.result()
+        # the pair-order check needs only the features; it runs before the stage, not beside
+        # it: OpenCV runs a parallel_for_ that starts while another thread's is under way
+        # serially (one process-wide flag), so SGBM beside the check's matcher ran on one core
+        plausibility.check_pair_order(
+            gray_left, gray_right, rig, names=names, rect=rect,
             features=(features_left, features_right),
         )  # fmt: skip
-        try:
-            result = stereo.stereo_points(
-                gray_left,
-                gray_right,
-                rig,
-                rect=rect,
-                features_left=features_left,
-                features_right=features_right,
-                left_name=names[0],
-                right_name=names[1],
-                min_points=1,
-                **StereoOptions(ratio=ratio).keywords(),
-            )
-        except Exception:
-            check.result()  # a pair the check refuses is named as the check names it
-            raise
-        check.result()
+        result = stereo.stereo_points(
+            gray_left,
+            gray_right,
+            rig,
+            rect=rect,
+            features_left=features_left,
+            features_right=features_right,
+            left_name=names[0],
+            right_name=names[1],
+            min_points=1,
+            **StereoOptions(ratio=ratio).keywords(),
+        )
     return result.points
