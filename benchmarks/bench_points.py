@@ -120,17 +120,33 @@ def _ratio(med: dict[str, tuple[float, float]], k: str) -> str:
     return f"{med[k][0] / med['sift'][0]:.2f} ({med[k][1] / med['sift'][1]:.2f})"
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--repeat", type=int, default=5)
+def pair_arguments(description: str, repeat: int) -> tuple[argparse.Namespace, Any, Any]:
+    """The points benchmarks' command line (``--repeat``, ``--pair``, ``--sizes``; ``paths``:
+    the pair's files, Art unless ``--pair``) and the pair read in colour; prints the load
+    average."""
+    parser = argparse.ArgumentParser(description=description)
+    parser.add_argument("--repeat", type=int, default=repeat)
     parser.add_argument("--pair", nargs=2, type=Path, metavar=("LEFT", "RIGHT"))
     parser.add_argument(
         "--sizes", nargs="+", type=_size, default=[(640, 480), (1280, 960), (1920, 1080)]
     )
     args = parser.parse_args()
-    left_path, right_path = args.pair or (ART / "view1.png", ART / "view5.png")
-    left0, right0 = load_image(left_path, gray=False), load_image(right_path, gray=False)
+    args.paths = args.pair or (ART / "view1.png", ART / "view5.png")
+    left0, right0 = (load_image(p, gray=False) for p in args.paths)
     print(f"load average before: {' '.join(f'{x:.2f}' for x in os.getloadavg())}")
+    return args, left0, right0
+
+
+def resized_pair(left0: Any, right0: Any, size: tuple[int, int]) -> tuple[Any, Any]:
+    """Both images resized to ``size`` (area averaging down, bilinear up)."""
+    interp = cv2.INTER_AREA if size[0] < left0.shape[1] else cv2.INTER_LINEAR
+    left = cv2.resize(left0, size, interpolation=interp)
+    return left, cv2.resize(right0, size, interpolation=interp)
+
+
+def main() -> None:
+    args, left0, right0 = pair_arguments(__doc__.splitlines()[0], 5)
+    left_path, right_path = args.paths
     print(f"pair: {left_path} / {right_path}, resized; wall (CPU) medians, s\n")
     print(
         "| size | SIFT both | SIFT, 2 threads | points now | now / SIFT | stage at 55e6388 "
@@ -140,9 +156,7 @@ def main() -> None:
     print("| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | --- | --- | --- |")
     names = (Path("left"), Path("right"))
     for size in args.sizes:
-        interp = cv2.INTER_AREA if size[0] < left0.shape[1] else cv2.INTER_LINEAR
-        left = cv2.resize(left0, size, interpolation=interp)
-        right = cv2.resize(right0, size, interpolation=interp)
+        left, right = resized_pair(left0, right0, size)
         rig = calibration.rig_from_short(0.16, 60.0, size)
 
         def sift(left: Any = left, right: Any = right) -> object:

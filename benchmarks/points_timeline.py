@@ -23,7 +23,6 @@ Run::
 
 from __future__ import annotations
 
-import argparse
 import functools
 import os
 import statistics
@@ -36,9 +35,10 @@ from typing import Any
 
 import cv2
 
+from bench_points import pair_arguments, resized_pair
 from scenespeak.cli.points import _stereo_points
 from scenespeak.perception import calibration, features, plausibility, stereo
-from scenespeak.perception.features import detect, load_image, to_gray
+from scenespeak.perception.features import detect, to_gray
 
 ART = Path(__file__).resolve().parents[1] / "../shared/data/real/stereo/middeval2/Art"
 #: (module, attribute, phase name) of the calls recorded, in the order they run.
@@ -123,21 +123,10 @@ def _sift_threads(gray: Any, repeat: int) -> list[str]:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--repeat", type=int, default=3)
-    parser.add_argument("--pair", nargs=2, type=Path, metavar=("LEFT", "RIGHT"))
-    parser.add_argument(
-        "--sizes", nargs="+", type=_size, default=[(640, 480), (1280, 960), (1920, 1080)]
-    )
-    args = parser.parse_args()
-    left_path, right_path = args.pair or (ART / "view1.png", ART / "view5.png")
-    left0, right0 = load_image(left_path, gray=False), load_image(right_path, gray=False)
-    print(f"load average before: {' '.join(f'{x:.2f}' for x in os.getloadavg())}")
+    args, left0, right0 = pair_arguments(__doc__.splitlines()[0], 3)
     names = (Path("left"), Path("right"))
     for size in args.sizes:
-        interp = cv2.INTER_AREA if size[0] < left0.shape[1] else cv2.INTER_LINEAR
-        left = cv2.resize(left0, size, interpolation=interp)
-        right = cv2.resize(right0, size, interpolation=interp)
+        left, right = resized_pair(left0, right0, size)
         rig = calibration.rig_from_short(0.16, 60.0, size)
         runs = []
         for _ in range(args.repeat):
