@@ -229,14 +229,33 @@ def test_edge_pair_buffers_say_how_many_pairs_they_need() -> None:
     ranges = (0, int(region_start[1]), int(region_start[1]), size)
     shift = (float(origin[1, 1] - origin[0, 1]), float(origin[1, 0] - origin[0, 0]))
     small = _batch.scratch(8)
-    needed = _batch.collect_pairs(srt, ranges, shift, small[0])
+    needed = _batch.collect_pairs(srt, ranges, shift, small)
     assert needed < -8
     big = _batch.grown(small, -needed)
-    n = _batch.collect_pairs(srt, ranges, shift, big[0])
+    n = _batch.collect_pairs(srt, ranges, shift, big)
     assert n == -needed
     roomy = _batch.scratch(10 * n)
-    assert _batch.collect_pairs(srt, ranges, shift, roomy[0]) == n
-    np.testing.assert_array_equal(big[0][:, :n], roomy[0][:, :n])
+    assert _batch.collect_pairs(srt, ranges, shift, roomy) == n
+    np.testing.assert_array_equal(big[:, :n], roomy[:, :n])
+
+
+def test_bitcasts_read_and_make_a_double_from_its_bits() -> None:
+    """``_jit.bitcasts`` (compiled: LLVM bitcasts) against NumPy's views."""
+    import numba
+
+    from scenespeak.spatial.forces import _batch
+
+    as_int = numba.njit(lambda x: _batch.as_int(x))
+    as_float = numba.njit(lambda b: _batch.as_float(b))
+    xs = np.array([1.0, 1.5, 2.0**-1022, 3.0e300, 0.1, 7.25])
+    bits = xs.view(np.int64)
+    assert [as_int(float(x)) for x in xs] == [int(b) for b in bits]
+    assert [as_float(int(b)) for b in bits] == [float(x) for x in xs]
+    # fdlibm's reduction: x = 2**k (1 + f), 1 + f in [sqrt(2)/2, sqrt(2))
+    for x in xs:
+        f, k = _batch._reduce(float(x))
+        assert math.sqrt(0.5) <= 1.0 + f < math.sqrt(2.0)
+        assert (1.0 + f) * 2.0**k == x
 
 
 def test_bucket_and_insertion_sort_give_the_same_order() -> None:

@@ -7,17 +7,18 @@ finds every (edge of A, edge of B) pair whose ranges of lines overlap; each cont
 1999; ``docs/forces.md``). For F2 that is a divided difference of ``Ψ(u) = u - u log u``: two
 logarithms per pair, which dominated the star's time when the walk took them one pair at a time
 (``math.log`` is a call into libm that the compiler cannot vectorise). So the work is split in
-three loops, each without branches so that the compiler turns it into SIMD instructions:
+two loops, each without branches so that the compiler turns it into SIMD instructions:
 
 1. :func:`collect_pairs` walks the tables; for each edge of one region it finds the run of the
    other's rows that it pairs with (two pointers), then writes each pair's signed end gaps
    ``d0, d1`` and weight into the buffers in a counted loop (:func:`_fill`);
-2. :func:`_split_gaps` takes ``|d0|`` and ``|d1|`` apart into mantissa and exponent (their bits:
-   fdlibm's ``log`` reduces ``x = 2**k (1 + f)`` with ``1 + f`` in ``[√2/2, √2)``);
-3. :func:`_sums` finishes both logarithms (fdlibm's polynomial in ``s = f / (2 + f)``, within
-   1 ulp of libm's; the two divisions of a pair share one) and adds the pairs' F0 and F2 terms to
-   the side each serves (θ where ``d > 0``, θ + π where ``d < 0``) by selects; the sums may be
-   reassociated (their order is not the walk's, which changes the last bits only).
+2. :func:`_sums` takes the logarithms of ``|d0|`` and ``|d1|`` (fdlibm's ``log``: from the
+   float's bits, ``x = 2**k (1 + f)`` with ``1 + f`` in ``[√2/2, √2)``, then a polynomial in
+   ``s = f / (2 + f)``; within 1 ulp of libm's; the two divisions of a pair share one) and adds
+   the pairs' F0 and F2 terms to the side each serves (θ where ``d > 0``, θ + π where
+   ``d < 0``) by selects; the sums may be reassociated (their order is not the walk's, which
+   changes the last bits only). The bits are read in registers (:func:`~scenespeak.spatial.
+   forces._jit.bitcasts`), so that this is one loop, not a pass through memory first.
 
 A pair whose gap changes sign (its edges cross) or touches zero (below :data:`TINY`) weighs
 nothing in those loops and is integrated afterwards by :func:`f0_f2_terms` with ``math.log``.
@@ -32,7 +33,7 @@ import math
 
 import numpy as np
 
-from scenespeak.spatial.forces._jit import jit, jit_inline, jit_reassoc
+from scenespeak.spatial.forces._jit import bitcasts, jit, jit_inline, jit_reassoc
 
 # Below this |h| / |m| the divided difference of Ψ is replaced by its Taylor series (the
 # reference's _TAYLOR_RATIO).
@@ -53,7 +54,8 @@ LG7 = 1.479819860511658591e-01
 MANTISSA = 0x000FFFFFFFFFFFFF
 ONE_BITS = 0x3FF0000000000000
 SQRT2_BITS = 0x3FF6A09E667F3BCD
-ABS_MASK = 0x7FFFFFFFFFFFFFFF
+
+as_float, as_int = bitcasts()
 
 
 @jit
@@ -99,26 +101,19 @@ def f0_f2_terms(d0: float, d1: float, weight: float) -> tuple[float, float, floa
     return weight * (d0 * d0 + d0 * d1 + d1 * d1), weight * _mean_f2(d0, d1), 0.0, 0.0
 
 
-Buffers = tuple[np.ndarray, np.ndarray]
-
-
-def scratch(capacity: int) -> Buffers:
-    """Buffers for ``capacity`` pairs: ``(pairs, parts)``.
-
-    ``pairs[0:3]`` are the pairs' end gaps ``d0, d1`` and weights (:func:`collect_pairs`),
-    ``parts[0:4]`` the int64 mantissas and exponents of ``|d0|, |d1|`` (:func:`_split_gaps`).
-    """
-    return np.empty((3, capacity)), np.empty((4, capacity), dtype=np.int64)
+def scratch(capacity: int) -> np.ndarray:
+    """Buffer for ``capacity`` pairs: rows ``d0, d1, weight`` (:func:`collect_pairs`)."""
+    return np.empty((3, capacity))
 
 
 scratch_jit = jit(scratch)
 
 
 @jit
-def grown(bufs: Buffers, needed: int) -> Buffers:
-    """``bufs``, or larger ones when a direction needs ``needed`` pairs (twice as many)."""
-    if needed <= bufs[0].shape[1]:
-        return bufs
+def grown(pairs: np.ndarray, needed: int) -> np.ndarray:
+    """``pairs``, or a larger buffer when a direction needs ``needed`` pairs (twice as many)."""
+    if needed <= pairs.shape[1]:
+        return pairs
     return scratch_jit(2 * needed)
 
 
@@ -216,34 +211,15 @@ def _usable(d0: float, d1: float) -> bool:
 
 
 @jit_inline
-def _split(b: int) -> tuple[int, float]:
-    """fdlibm's reduction of the positive double with bits ``b``: the bits of ``1 + f`` in
-    ``[√2/2, √2)`` and the exponent ``k`` (``x = 2**k (1 + f)``)."""
+def _reduce(x: float) -> tuple[float, float]:
+    """fdlibm's reduction of a positive normal double: ``(f, k)`` with ``x = 2**k (1 + f)``,
+    ``1 + f`` in ``[√2/2, √2)`` (from its bits)."""
+    b = as_int(x)
     mb = (b & MANTISSA) | ONE_BITS
     big = mb > SQRT2_BITS
-    return (mb - (1 << 52) if big else mb), float((b >> 52) - 1023 + (1 if big else 0))
-
-
-@jit
-def _split_gaps(pairs: np.ndarray, n: int, parts: np.ndarray) -> int:
-    """``parts[0:2]`` the bits of ``1 + f`` and ``parts[2:4]`` (as float64) the exponents of
-    ``|d0|`` and ``|d1|`` (of 1.0 for a pair that is not :func:`_usable`); returns the number
-    of pairs that are not."""
-    d0s = pairs[0]
-    d1s = pairs[1]
-    b0s = d0s.view(np.int64)
-    b1s = d1s.view(np.int64)
-    m0 = parts[0]
-    m1 = parts[1]
-    e0 = parts[2].view(np.float64)
-    e1 = parts[3].view(np.float64)
-    bad = 0
-    for i in range(n):
-        ok = _usable(d0s[i], d1s[i])
-        m0[i], e0[i] = _split((b0s[i] & ABS_MASK) if ok else ONE_BITS)
-        m1[i], e1[i] = _split((b1s[i] & ABS_MASK) if ok else ONE_BITS)
-        bad += 0 if ok else 1
-    return bad
+    return as_float(mb - (1 << 52) if big else mb) - 1.0, float(
+        (b >> 52) - 1023 + (1 if big else 0)
+    )
 
 
 @jit_inline
@@ -257,8 +233,9 @@ def _log_poly(f: float, s: float, k: float) -> float:
 
 
 @jit_reassoc
-def _sums(pairs: np.ndarray, n: int, parts: np.ndarray) -> tuple[float, float, float, float]:
-    """``(Σ 6 F0, Σ F2)`` of the θ side, then of the θ + π side, over the :func:`_usable` pairs.
+def _sums(pairs: np.ndarray, n: int) -> tuple[float, float, float, float, int]:
+    """``(Σ 6 F0, Σ F2)`` of the θ side, then of the θ + π side, over the :func:`_usable` pairs,
+    and the number of pairs that are not.
 
     F0: ``w (a0² + a0 a1 + a1²)`` (six times the mean of ``u² / 2``); F2: :func:`_mean_f2`
     from the logarithms of ``a0 = |d0|, a1 = |d1|``, its Taylor branch as ``-(l0 + l1) / 2 -
@@ -267,10 +244,7 @@ def _sums(pairs: np.ndarray, n: int, parts: np.ndarray) -> tuple[float, float, f
     d0s = pairs[0]
     d1s = pairs[1]
     ws = pairs[2]
-    m0 = parts[0].view(np.float64)
-    m1 = parts[1].view(np.float64)
-    e0 = parts[2].view(np.float64)
-    e1 = parts[3].view(np.float64)
+    bad = 0
     p0 = 0.0
     p2 = 0.0
     q0 = 0.0
@@ -282,11 +256,12 @@ def _sums(pairs: np.ndarray, n: int, parts: np.ndarray) -> tuple[float, float, f
         a0 = abs(d0) if ok else 1.0
         a1 = abs(d1) if ok else 1.0
         w = ws[i] if ok else 0.0
-        f0 = m0[i] - 1.0
-        f1 = m1[i] - 1.0
+        bad += 0 if ok else 1
+        f0, k0 = _reduce(a0)
+        f1, k1 = _reduce(a1)
         inv = 1.0 / ((2.0 + f0) * (2.0 + f1))
-        l0 = _log_poly(f0, f0 * (2.0 + f1) * inv, e0[i])
-        l1 = _log_poly(f1, f1 * (2.0 + f0) * inv, e1[i])
+        l0 = _log_poly(f0, f0 * (2.0 + f1) * inv, k0)
+        l1 = _log_poly(f1, f1 * (2.0 + f0) * inv, k1)
         t0 = w * (a0 * a0 + a0 * a1 + a1 * a1)
         h = a1 - a0
         m = 0.5 * (a0 + a1)
@@ -303,16 +278,14 @@ def _sums(pairs: np.ndarray, n: int, parts: np.ndarray) -> tuple[float, float, f
         p2 += 0.0 if neg else t2
         q0 += t0 if neg else 0.0
         q2 += t2 if neg else 0.0
-    return p0, p2, q0, q2
+    return p0, p2, q0, q2, bad
 
 
 @jit
-def integrate_pairs(bufs: Buffers, n: int, acc: np.ndarray) -> None:
+def integrate_pairs(pairs: np.ndarray, n: int, acc: np.ndarray) -> None:
     """Add the ``n`` collected pairs' F0 (times 6) and F2 terms to ``acc`` (θ: ``acc[0:2]``,
     θ + π: ``acc[2:4]``); the pairs that are not :func:`_usable` one at a time."""
-    pairs, parts = bufs
-    bad = _split_gaps(pairs, n, parts)
-    p0, p2, q0, q2 = _sums(pairs, n, parts)
+    p0, p2, q0, q2, bad = _sums(pairs, n)
     acc[0] += p0
     acc[1] += p2
     acc[2] += q0

@@ -195,6 +195,55 @@ def jit_reassoc(fn: F) -> F:
     return _compiled(fn, {**_OPTIONS, "fastmath": {"reassoc"}})
 
 
+def bitcasts() -> tuple[Callable[[int], float], Callable[[float], int]]:
+    """``(as_float, as_int)``: the double with the bits of an int64 and back, in registers.
+
+    With Numba, two LLVM ``bitcast`` intrinsics, which the compiler vectorises (reading a
+    float's bits through an int64 view of its array needs a pass through memory); without it,
+    the same through :mod:`struct`.
+
+    With Numba they are usable in compiled code only (``tests/spatial/test_forces_kernel.py``
+    checks them there against NumPy's views).
+
+    Examples
+    --------
+    >>> as_float, as_int = bitcasts()
+    >>> callable(as_float) and callable(as_int)
+    True
+    """
+    numba = _numba() if available() else None
+    if numba is None:
+        import struct
+
+        def as_float(b: int) -> float:
+            return float(struct.unpack("<d", struct.pack("<q", b))[0])
+
+        def as_int(x: float) -> int:
+            return int(struct.unpack("<q", struct.pack("<d", x))[0])
+
+        return as_float, as_int
+    from llvmlite import ir
+    from numba.extending import intrinsic
+
+    @intrinsic
+    def as_float_(typingctx: Any, b: Any) -> Any:
+        def codegen(context: Any, builder: Any, signature: Any, args: Any) -> Any:
+            return builder.bitcast(args[0], ir.DoubleType())
+
+        return numba.types.float64(numba.types.int64), codegen
+
+    @intrinsic
+    def as_int_(typingctx: Any, x: Any) -> Any:
+        def codegen(context: Any, builder: Any, signature: Any, args: Any) -> Any:
+            return builder.bitcast(args[0], ir.IntType(64))
+
+        return numba.types.int64(numba.types.float64), codegen
+
+    to_float: Callable[[int], float] = as_float_  # type: ignore[assignment]
+    to_int: Callable[[float], int] = as_int_  # type: ignore[assignment]
+    return to_float, to_int
+
+
 def _compiled(fn: F, options: dict[str, Any]) -> F:
     numba = _numba() if available() else None
     if numba is None:

@@ -31,7 +31,6 @@ from typing import TypeVar
 import numpy as np
 
 from scenespeak.spatial.forces._batch import (
-    Buffers,
     collect_pairs,
     grown,
     integrate_pairs,
@@ -228,18 +227,18 @@ def _walk_f0_f2(
     srt: np.ndarray,
     ranges: tuple[int, int, int, int],
     shift: tuple[float, float],
-    bufs: Buffers,
+    bufs: np.ndarray,
     acc: np.ndarray,
-) -> Buffers:
+) -> np.ndarray:
     """F0 and F2 of one pair in one direction into ``acc`` = ``(F0(θ), F2(θ), F0(θ + π),
     F2(θ + π))``: :func:`_collect`'s two-pointer walk over the sorted rows ``a0:a1, b0:b1 =
     ranges``, the edge pairs in batches (:mod:`~scenespeak.spatial.forces._batch`: branch-free,
-    their logarithms vectorised). Returns the buffers, grown when this direction needed more.
+    their logarithms vectorised). Returns the pairs' buffer, grown when this direction needed more.
     """
-    n = collect_pairs(srt, ranges, shift, bufs[0])
+    n = collect_pairs(srt, ranges, shift, bufs)
     if n < 0:
         bufs = grown(bufs, -n)
-        n = collect_pairs(srt, ranges, shift, bufs[0])
+        n = collect_pairs(srt, ranges, shift, bufs)
     acc[:] = 0.0
     integrate_pairs(bufs, n, acc)
     acc[0] /= 6.0
