@@ -56,6 +56,7 @@ from scenespeak.description import PairRelation, SceneDescription
 from scenespeak.errors import DatabaseError, ImageError, InputError
 from scenespeak.perception.blas import single_threaded_blas
 from scenespeak.perception.features import Features, detect, to_gray
+from scenespeak.perception.known_evidence import KeypointEvidence
 from scenespeak.perception.objects import ObjectOptions, SceneObject
 from scenespeak.perception.recognition.colour import ColourModel, name_unknown_objects
 from scenespeak.perception.recognition.options import LabelOptions
@@ -415,7 +416,12 @@ def _after_stereo(
             # project into the left image as given only when it was not resampled
             trim = (np.asarray(rig.up, np.float64), replace(opts.objects, radius=None))
             objects = name_unknown_objects(
-                objects, early.images[0], rig.K_left, early.colours, remake=trim
+                objects,
+                early.images[0],
+                rig.K_left,
+                early.colours,
+                remake=trim,
+                veto=_keypoint_veto(early, rig),
             )
 
     say("relations")
@@ -529,6 +535,24 @@ def dataset_labels(dataset: str | PathLike[str]) -> list[str]:
         If the dataset has no ``objects`` folder.
     """
     return [p.name for p in _object_folders(dataset)]
+
+
+def _keypoint_veto(
+    early: _EarlyStages, rig: Any
+) -> Callable[[SceneObject, str], str | None] | None:
+    """The keypoints' veto on names given without a geometric check (None without the
+    database's ids: geometry first only)."""
+    if not early.id_to_label or early.labelling is None:
+        return None
+    h, w = early.images[0].shape[:2]
+    evidence = KeypointEvidence.from_matches(
+        np.asarray(rig.K_left, np.float64),
+        (h, w),
+        np.asarray(early.features_left.xy, np.float64),
+        early.labelling.matched,
+        early.id_to_label,
+    )
+    return evidence.refuses
 
 
 def database_from_dataset(

@@ -127,6 +127,9 @@ def test_an_unknown_grey_segment_is_named_without_the_floor_beside_it() -> None:
     (named,) = name_unknown([seg], image, K, MODELS, remake=(UP, ObjectOptions(radius=None)))
     assert named.label == "soup" and named.name == "soup"
     assert "named by grey levels" in named.notes[-1] and named.confidence == 0.5
+    # the keypoints' veto is asked of names by colour only (known_evidence's docstring)
+    (unvetoed,) = name_unknown([seg], image, K, MODELS, veto=lambda _o, _lab: "no")
+    assert unvetoed.label == "soup"
     u = (named.xyz @ K.T)[:, 0] / named.xyz[:, 2]
     assert u.min() > 98  # the floor's points are dropped
     # the floor-like pixels are the streak's: level of the floor below, weak gradient

@@ -33,7 +33,7 @@ images) are never named this way.
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -321,6 +321,7 @@ def name_unknown_objects(
     options: ColourOptions | None = None,
     remake: tuple[NDArray[np.float64], ObjectOptions] | None = None,
     grey: GreyOptions | None = _GREY,
+    veto: Callable[[SceneObject, str], str | None] | None = None,
 ) -> tuple[SceneObject, ...]:
     """``objects`` with the unknown ones that colour and shape name (:func:`name_by_colour`),
     or grey levels, texture and shape (:func:`~scenespeak.perception.recognition.grey.
@@ -345,6 +346,12 @@ def name_unknown_objects(
         object's depth over a plain floor beside it, and those points belong to no object.
     grey : GreyOptions or None
         The grey cue's knobs (None: off; models without grey signatures never name by it).
+    veto : callable, optional
+        ``veto(obj, label)``: why ``obj`` cannot be named ``label`` by colour (None: it may
+        be), e.g. :meth:`scenespeak.perception.known_evidence.KeypointEvidence.refuses`; a
+        vetoed object stays unknown with a note saying why. Not asked of names by grey
+        levels: the grey cue's textures (a cell photo, a star field) give keypoints that are
+        not distinctive enough to pass the ratio test, so few votes say nothing there.
     """
     o = options or ColourOptions()
     img = np.asarray(image)
@@ -359,6 +366,10 @@ def name_unknown_objects(
         if named is None or (named[1].startswith(_GREY_NOTE) and _piece_of(obj, named[0], out)):
             continue
         label, note, keep = named
+        refused = _vetoed(obj, label, note, veto)
+        if refused is not None:
+            out[i] = refused
+            continue
         base = obj
         if remake is not None:
             made = make_object(label, obj.xyz[keep], remake[0], source="segment", options=remake[1])
@@ -368,6 +379,22 @@ def name_unknown_objects(
             base, label=label, name=label, confidence=0.5, notes=(*base.notes, note)
         )
     return tuple(_renumbered(out))
+
+
+def _vetoed(
+    obj: SceneObject,
+    label: str,
+    note: str,
+    veto: Callable[[SceneObject, str], str | None] | None,
+) -> SceneObject | None:
+    """``obj`` still unknown with a note saying why, when ``veto`` refuses its name by colour
+    (names by grey levels are not asked); None when it may be named."""
+    if veto is None or note.startswith(_GREY_NOTE):
+        return None
+    why = veto(obj, label)
+    if why is None:
+        return None
+    return dataclasses.replace(obj, notes=(*obj.notes, f"not named {label}: {why}"))
 
 
 @dataclass(eq=False)
