@@ -201,3 +201,32 @@ def test_a_detections_grown_outline_takes_no_segment_at_another_depth() -> None:
     assert taken[20, 10] and not taken[20, 40]
     work.own = [np.zeros((0, 3))]  # without keypoint depth the whole outline, as before
     assert _taken(work, 0, None, above)[20, 40]
+
+
+def test_unknown_segments_with_the_plain_background_out_need_texture_not_keypoints() -> None:
+    """A far cereal box's dark face showed 3 keypoints (dropped by the 4-keypoint rule); a
+    plain red block's face, plain inside its edges, was named 'tea' by colour once it came
+    through: with the plain background left out a segment needs texture instead."""
+    from scenespeak.perception.scene_unknown import unknown_segments
+
+    h, w = 60, 80
+    labels = np.full((h, w), -1, np.int32)
+    labels[10:40, 10:40] = 0
+    seg = Segments(labels, np.array([900]), 0.0)
+    points = np.full((h, w, 3), np.nan, np.float32)
+    rng = np.random.default_rng(0)
+    points[10:40, 10:40] = np.c_[
+        rng.uniform(0.0, 0.1, 900), rng.uniform(-0.1, 0.0, 900), rng.uniform(1.5, 1.55, 900)
+    ].reshape(30, 30, 3)
+    kp = np.array([[20.0, 20.0], [30.0, 30.0]])  # two keypoints
+    up = np.array([0.0, -1.0, 0.0])
+    opts = RegionStageOptions()
+
+    def found(textured: np.ndarray | None) -> int:
+        return len(unknown_segments(points, seg, kp, set(), up, opts, {}, textured))
+
+    assert found(None) == 0  # fewer than 4 keypoints
+    assert found(np.ones((h, w), bool)) == 1  # textured: 2 keypoints are enough
+    plain_face = np.ones((h, w), bool)
+    plain_face[14:36, 14:36] = False  # plain inside its edges: 46 % textured
+    assert found(plain_face) == 0

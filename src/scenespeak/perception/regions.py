@@ -54,6 +54,7 @@ __all__ = [
     "components",
     "name_segments",
     "plain_background",
+    "plain_pixels",
     "point_map",
     "scene_geometry",
     "segment",
@@ -256,6 +257,37 @@ def support_plane(
     return best
 
 
+def plain_pixels(
+    gray: NDArray[np.generic], options: RegionOptions | None = None, stride: int = 1
+) -> tuple[NDArray[np.bool_], NDArray[np.bool_]]:
+    """On the ``stride`` grid: the plain pixels (mean absolute gradient, horizontal plus
+    vertical Sobel / 8, over the ``texture_window`` square at most ``min_texture``), and the
+    pixels with only a vertical gradient (a horizontal edge). Both all False when
+    ``min_texture`` is 0.
+
+    >>> img = np.zeros((20, 20), np.uint8); img[10:] = 90
+    >>> plain, edge = plain_pixels(img)
+    >>> bool(plain[2, 5]), bool(edge[10, 5]), bool(plain[10, 5])
+    (True, True, False)
+    """
+    opts = options or RegionOptions()
+    g = np.asarray(gray)
+    if g.ndim == 3:
+        g = cv2.cvtColor(np.ascontiguousarray(g[..., :3]), cv2.COLOR_RGB2GRAY)
+    st = max(int(stride), 1)
+    shape = g[::st, ::st].shape
+    if opts.min_texture <= 0:
+        return np.zeros(shape, bool), np.zeros(shape, bool)
+    f = np.asarray(g, np.float32)
+    win = (max(int(opts.texture_window), 1),) * 2
+    limit = opts.min_texture * 8  # a Sobel response is 8 x the gray levels per pixel
+    gx = np.asarray(cv2.boxFilter(np.abs(cv2.Sobel(f, cv2.CV_32F, 1, 0, ksize=3)), -1, win))
+    gy = np.asarray(cv2.boxFilter(np.abs(cv2.Sobel(f, cv2.CV_32F, 0, 1, ksize=3)), -1, win))
+    gx, gy = gx[::st, ::st], gy[::st, ::st]
+    plain = gx + gy <= limit
+    return plain, (gx <= limit) & ~plain
+
+
 def plain_background(
     gray: NDArray[np.generic], options: RegionOptions | None = None, stride: int = 1
 ) -> NDArray[np.bool_]:
@@ -264,10 +296,11 @@ def plain_background(
 
     A pixel is plain when the mean absolute gradient (horizontal plus vertical Sobel, / 8)
     over the ``texture_window`` square round it is at most ``min_texture`` (a box's top edge
-    is a horizontal line: it must close the face it bounds). Plain pixels that textured ones
-    enclose — the plain face of a box inside its edges — are not background; pixels with only
-    a vertical gradient (a horizontal edge: the horizon, a box's top edge) are, since a match
-    along rows finds no disparity there. All False when ``min_texture`` is 0.
+    is a horizontal line: it must close the face it bounds; :func:`plain_pixels`). Plain
+    pixels that textured ones enclose — the plain face of a box inside its edges — are not
+    background; pixels with only a vertical gradient (a horizontal edge: the horizon, a box's
+    top edge) are, since a match along rows finds no disparity there. All False when
+    ``min_texture`` is 0.
 
     Examples
     --------
@@ -277,29 +310,19 @@ def plain_background(
     >>> bool(bg[2, 2]), bool(bg[20, 30]), bool(bg[20, 20]), bool(bg[10, 30])
     (True, False, False, True)
     """
-    opts = options or RegionOptions()
-    g = np.asarray(gray)
-    if g.ndim == 3:
-        g = cv2.cvtColor(np.ascontiguousarray(g[..., :3]), cv2.COLOR_RGB2GRAY)
-    st = max(int(stride), 1)
-    shape = g[::st, ::st].shape
-    if opts.min_texture <= 0:
-        return np.zeros(shape, bool)
-    f = np.asarray(g, np.float32)
-    win = (max(int(opts.texture_window), 1),) * 2
-    limit = opts.min_texture * 8  # a Sobel response is 8 x the gray levels per pixel
-    gx = np.asarray(cv2.boxFilter(np.abs(cv2.Sobel(f, cv2.CV_32F, 1, 0, ksize=3)), -1, win))
-    gy = np.asarray(cv2.boxFilter(np.abs(cv2.Sobel(f, cv2.CV_32F, 0, 1, ksize=3)), -1, win))
-    gx, gy = gx[::st, ::st], gy[::st, ::st]
-    plain = gx + gy <= limit
+    return _background(*plain_pixels(gray, options, stride))
+
+
+def _background(plain: NDArray[np.bool_], edge: NDArray[np.bool_]) -> NDArray[np.bool_]:
+    """:func:`plain_background` of :func:`plain_pixels`' two masks."""
+    if not plain.any():
+        return np.asarray(edge)
     n, lab = cv2.connectedComponents(plain.astype(np.uint8), connectivity=4)
     border = np.unique(np.r_[lab[0], lab[-1], lab[:, 0], lab[:, -1]])
     open_ = np.zeros(n, bool)
     open_[border] = True
     open_[0] = False  # label 0: the textured pixels
-    # a horizontal edge alone (the horizon, a box's top edge) has no disparity to measure along
-    # rows (the aperture problem): it closes a face, but is not part of one
-    return np.asarray(open_[lab] | ((gx <= limit) & ~plain))
+    return np.asarray(open_[lab] | edge)
 
 
 def segment(
@@ -424,14 +447,20 @@ PLAIN_SHARE = 0.1
 @dataclass(frozen=True, eq=False)
 class SceneGeometry:
     """The scene's support plane, its segments and the dense point map (input left pixels);
-    ``plain``: whether the plain background (:func:`plain_background`, at least
-    :data:`PLAIN_SHARE` of the image) was left out of the segments."""
+    ``textured``: where the plain background (:func:`plain_background`, at least
+    :data:`PLAIN_SHARE` of the image) was left out of the segments, the pixels that are not
+    plain (:func:`plain_pixels`); None where it was not."""
 
     normal: NDArray[np.float64]
     level: float
     segments: Segments
     points: NDArray[np.float32]  # (h, w, 3), NaN where no depth
-    plain: bool = False
+    textured: NDArray[np.bool_] | None = None
+
+    @property
+    def plain(self) -> bool:
+        """Whether the plain background was left out of the segments."""
+        return self.textured is not None
 
 
 def scene_geometry(
@@ -462,9 +491,10 @@ def scene_geometry(
     xyz, xy = stereo.region_points(clean, grid, max_points=None)
     small_shape = ((h + st - 1) // st, (w + st - 1) // st)
     pm_small = point_map(xyz, xy / st, small_shape)
-    background = None
+    background = plain = None
     if image is not None and np.asarray(image).shape[:2] == (h, w):
-        background = plain_background(image, options, st)
+        plain, horizontal = plain_pixels(image, options, st)
+        background = _background(plain, horizontal)
     if background is not None and float(background.mean()) < PLAIN_SHARE:
         background = None  # a textured scene: its depth is measured, leave it as it is
     if background is not None:
@@ -485,4 +515,7 @@ def scene_geometry(
     labels = np.repeat(np.repeat(seg.labels, st, axis=0), st, axis=1)[:h, :w]
     pm = np.repeat(np.repeat(pm_small, st, axis=0), st, axis=1)[:h, :w]
     full = Segments(np.ascontiguousarray(labels), seg.sizes * st * st, seg.level)
-    return SceneGeometry(n, level, full, np.ascontiguousarray(pm), background is not None)
+    textured = None
+    if background is not None and plain is not None:
+        textured = np.repeat(np.repeat(~plain, st, axis=0), st, axis=1)[:h, :w]
+    return SceneGeometry(n, level, full, np.ascontiguousarray(pm), textured)

@@ -81,10 +81,14 @@ class RegionStageOptions:
     unknown_min_pixels, unknown_min_keypoints : int
         Least size of such a segment, and least SIFT keypoints in it (the dense map streaks
         over a plain floor; a real object shows some texture).
-    unknown_min_keypoints_plain : int
+    unknown_min_keypoints_plain, unknown_min_textured : int, float
         The least keypoints instead when the plain background was taken out of the segments
         (:attr:`SceneGeometry.plain`): its streaks are gone, and a far dark face (the night
-        sky of a cereal box 1.8 m away on tuning-40) shows 1-3 keypoints.
+        sky of a cereal box 1.8 m away on tuning-40) shows 1-3 keypoints; a segment must then
+        have at least ``unknown_min_textured`` of its pixels textured (the far cereal box and
+        the other textured objects: 1.0; a plain red block, whose face is plain inside its
+        edges: 0.44-0.48 — a piece of it with 5 keypoints, 0.62, was named 'tea' by colour on
+        leave-half-out stress60).
     unknown_max_extent, unknown_max_distance : float
         Larger or farther segments are background, not objects (metres).
     min_votes, min_votes_instance, vote_share, vote_lead : int, int, float, float
@@ -115,6 +119,7 @@ class RegionStageOptions:
     unknown_min_pixels: int = 400
     unknown_min_keypoints: int = 4
     unknown_min_keypoints_plain: int = 1
+    unknown_min_textured: float = 0.8
     unknown_max_extent: float = 0.6
     unknown_max_distance: float = 2.5
     min_votes: int = 8
@@ -332,9 +337,8 @@ def objects_from_regions(
     claimed = _voted_objects(work, residual, objects)
     name_instances(objects)
     if opts.unknown:
-        need = opts.unknown_min_keypoints_plain if geo.plain else opts.unknown_min_keypoints
         objects += unknown_segments(
-            geo.points, residual, inp.keypoints_xy, claimed, inp.up, opts, work.kw, need
+            geo.points, residual, inp.keypoints_xy, claimed, inp.up, opts, work.kw, geo.textured
         )
     return [volume_centre(o, inp.up) for o in objects], skipped, geo
 

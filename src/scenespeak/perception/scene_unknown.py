@@ -183,19 +183,25 @@ def unknown_segments(
     up: NDArray[np.float64],
     opts: RegionStageOptions,
     kw: dict[str, Any],
-    min_keypoints: int | None = None,
+    textured: NDArray[np.bool_] | None = None,
 ) -> list[SceneObject]:
-    """Segments no detection holds, as unknown objects (left to right); a segment needs
-    ``min_keypoints`` SIFT keypoints (None: ``opts.unknown_min_keypoints``)."""
+    """Segments no detection holds, as unknown objects (left to right). A segment needs
+    ``opts.unknown_min_keypoints`` SIFT keypoints; with the ``textured`` pixels (the plain
+    background was left out of the segments) ``opts.unknown_min_keypoints_plain`` are
+    enough, and at least ``opts.unknown_min_textured`` of its pixels must be textured."""
     out: list[tuple[float, SceneObject]] = []
     h, w = segments.labels.shape
     c = np.clip(np.rint(keypoints_xy[:, 0]).astype(np.intp), 0, w - 1)
     r = np.clip(np.rint(keypoints_xy[:, 1]).astype(np.intp), 0, h - 1)
     hit = segments.labels[r, c]
     n_kp = np.bincount(hit[hit >= 0], minlength=len(segments.sizes))
-    need = opts.unknown_min_keypoints if min_keypoints is None else min_keypoints
+    low = opts.unknown_min_keypoints if textured is None else opts.unknown_min_keypoints_plain
     for k, size in enumerate(segments.sizes.tolist()):
-        if k in claimed or size < opts.unknown_min_pixels or n_kp[k] < need:
+        if k in claimed or size < opts.unknown_min_pixels or n_kp[k] < low:
+            continue
+        if textured is not None and (
+            float(textured[segments.mask(k)].mean()) < opts.unknown_min_textured
+        ):
             continue
         pts = points[segments.mask(k)].astype(np.float64)
         pts = pts[np.all(np.isfinite(pts), axis=1)]
