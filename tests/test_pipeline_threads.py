@@ -16,8 +16,9 @@ from scenespeak.errors import ImageError
 from scenespeak.perception.calibration import rig_from_short
 from scenespeak.perception.recognition import ObjectDatabase
 from scenespeak.perception.recognition.results import Labelling
+from scenespeak.perception.sharing import run_shared
 from scenespeak.pipeline import describe_scene
-from scenespeak.pipeline_threads import Abandoned, Guess
+from scenespeak.pipeline_threads import Abandoned, Guess, Helper
 
 NEAR = {"astronaut": (-0.25, 1.2, 0.2), "chelsea": (0.22, 1.0, 0.2), "coffee": (0.0, 1.8, 0.25)}
 
@@ -116,3 +117,43 @@ def test_an_adopted_guess_raises_its_error() -> None:
         guess = Guess.start(pool, run)
         with pytest.raises(ImageError, match="no stereo matches"):
             guess.adopt({}, lambda stage: None)
+
+
+def test_a_helper_runs_the_shared_jobs_in_the_waiting_thread_and_keeps_their_order() -> None:
+    here = threading.get_ident()
+    ran_by: dict[int, int] = {}
+    started = threading.Event()
+
+    def job(i: int) -> int:
+        ran_by[i] = threading.get_ident()
+        if i == 0:
+            started.set()
+            # the first job waits for the helper to take the next ones (the waiting thread)
+            for _ in range(500):
+                if any(t == here for t in ran_by.values()):
+                    break
+                threading.Event().wait(0.01)
+        return i * i
+
+    helper = Helper()
+    with ThreadPoolExecutor(1) as pool:
+        done = pool.submit(run_shared, [lambda i=i: job(i) for i in range(8)], helper)
+        assert started.wait(5)
+        helper.serve(done)
+        assert done.result() == [i * i for i in range(8)]
+    assert here in ran_by.values()  # the waiting thread took some
+    assert any(t != here for t in ran_by.values())
+
+
+def test_a_helper_skips_what_its_sharer_cancelled_and_passes_errors_back() -> None:
+    helper = Helper()
+    skipped = helper.submit(pow, 2, 3)
+    assert skipped.cancel()  # its sharer did every job itself
+
+    def failing() -> None:
+        raise ImageError("left.png", "no stereo matches")
+
+    with ThreadPoolExecutor(1) as pool:
+        done = pool.submit(lambda: helper.submit(failing).exception(5))
+        helper.serve(done)
+        assert isinstance(done.result(), ImageError)

@@ -24,10 +24,12 @@ stage's result in a frozen :class:`SceneDescription`:
 
 Threads: the two SIFT extractions run at the same time; then the second thread runs the whole
 stereo stage (matching, SGBM around the matches, triangulation) and geometry first's support
-plane and segments while this one labels the left keypoints, and then the objects and the
-relations on that first labelling, kept when the finer search that follows (its boxes go to
-whichever thread is free) adds nothing (:class:`scenespeak.pipeline_threads.Guess`;
-``docs/architecture.md``; the result is the same with one thread).
+plane and segments while this one makes the left image's plain background and labels the left
+keypoints, and then the objects and the relations on that first labelling, kept when the finer
+search that follows (its boxes go to whichever thread is free) adds nothing
+(:class:`scenespeak.pipeline_threads.Guess`); meanwhile this thread helps with the objects'
+detections (:class:`scenespeak.pipeline_threads.Helper`; ``docs/architecture.md``; the result
+is the same with one thread).
 
 Speed (``benchmarks/bench_pipeline.py --only timing``, 640×480 pair, 5 objects): 1.62× the
 two SIFT extractions one after the other (idle 2-core machine, before the guess); the target
@@ -42,7 +44,7 @@ from __future__ import annotations
 
 import time
 from collections.abc import Callable, Collection, Mapping
-from concurrent.futures import Executor, Future, ThreadPoolExecutor
+from concurrent.futures import Executor, ThreadPoolExecutor
 from dataclasses import dataclass, field, replace
 from functools import partial
 from os import PathLike
@@ -61,10 +63,13 @@ from scenespeak.perception.objects import ObjectOptions, SceneObject
 from scenespeak.perception.recognition.colour import ColourModel, name_unknown_objects
 from scenespeak.perception.recognition.options import LabelOptions
 from scenespeak.perception.recognition.results import Labelling
-from scenespeak.perception.scene_objects import StrategyOptions, scene_objects
+from scenespeak.perception.scene_objects import StrategyOptions, plain_for, scene_objects
 from scenespeak.perception.scene_objects import outline_mask as _outline_mask  # noqa: F401  (pipeline_rgbd)
 from scenespeak.perception.stage_options import StereoOptions
-from scenespeak.pipeline_threads import Guess, InlineExecutor, Say, StereoStage, stereo_stage
+from scenespeak.pipeline_threads import InlineExecutor, Say, StereoStage, label_and_finish
+from scenespeak.pipeline_threads import fill as _fill
+from scenespeak.pipeline_threads import plain_promise as _plain_promise
+from scenespeak.pipeline_threads import stereo_stage as _stereo_stage
 from scenespeak.pipeline_threads import timed as _timed
 from scenespeak.spatial.options import RelationOptions
 
@@ -295,60 +300,32 @@ def describe_scene(
         future_r = pool.submit(detect, to_gray(right), precise_upscale=False)
         feats_l = detect(to_gray(left), precise_upscale=False)
         timings["sift"] = time.perf_counter() - t0
+        plain = _plain_promise(opts.threads, opts.strategy)  # the left image's, made here
         future_st = pool.submit(
-            stereo_stage,
+            _stereo_stage,
             (left, right, rig),
             (opts.stereo, opts.strategy),
             feats_l,
             future_r,
             (lname, rname),
             timings,
+            plain,
         )
+        if plain is not None:
+            _fill(plain, plain_for, left, left.shape[:2])
         id_to_label = {o.id: o.label for o in db.list_objects()} if opts.strategy.geometry else {}
         colours = db.colour_models() if opts.labels.colour and hasattr(db, "colour_models") else {}
         early = partial(
             _EarlyStages, (left, right), feats_l, id_to_label=id_to_label, colours=colours
         )
 
-        def rest(labelling: Labelling, times: dict[str, float], tell: Say) -> SceneDescription:
+        def rest(
+            labelling: Labelling, share: Executor | None, times: dict[str, float], tell: Say
+        ) -> SceneDescription:
             stage = early(stereo=future_st.result(), labelling=labelling)
-            return _after_stereo(stage, opts, src, times, tell)
+            return _after_stereo(stage, opts, src, times, tell, share)
 
-        return _label_and_finish(db, (feats_l, left), opts, pool, rest, future_st, timings, say)
-
-
-def _label_and_finish(
-    db: Any,
-    scene: tuple[Features, NDArray[np.generic]],
-    opts: PipelineOptions,
-    pool: Executor,
-    rest: Callable[[Labelling, dict[str, float], Say], SceneDescription],
-    stereo_done: Future[StereoStage],
-    timings: dict[str, float],
-    say: Say,
-) -> SceneDescription:
-    """Stage 2 and the rest: the first labelling, the guess at the rest of the chain (two
-    threads), the finer search; then the guess kept or the rest run here on what it found."""
-    feats_l, left = scene
-    with _timed(timings, "label"):
-        first: Labelling = db.label(feats_l, opts.labels)
-        guess = Guess.start(pool, partial(rest, first)) if opts.threads > 1 else None
-        try:
-            # the finer search looks again where matches explain nothing; its boxes are
-            # shared with the stereo thread once that is free (same result)
-            labelling = db.look_closer(feats_l, first, left, opts.labels, executor=pool)
-        except BaseException:
-            if guess is not None:
-                guess.abandon()
-            raise
-        if guess is not None and labelling is not first:
-            guess.abandon()  # the finer search found more: the rest runs here
-    say("stereo")
-    with _timed(timings, "wait"):
-        if guess is not None and labelling is first:
-            return guess.adopt(timings, say)
-        stereo_done.result()
-    return rest(labelling, timings, say)
+        return label_and_finish(db, (feats_l, left), opts, pool, rest, future_st, timings, say)
 
 
 @dataclass(frozen=True, eq=False)
@@ -388,8 +365,10 @@ def _after_stereo(
     src: dict[str, str],
     timings: dict[str, float],
     say: Callable[[str], None],
+    share: Executor | None = None,
 ) -> SceneDescription:
-    """Stages 3-5 of :func:`describe_scene` once the labels and the stereo points are known."""
+    """Stages 3-5 of :func:`describe_scene` once the labels and the stereo points are known
+    (``share``: an executor to share the objects' work with)."""
     result = early.stereo.result
     rig = result.rect.rig
     points = result.points
@@ -410,6 +389,7 @@ def _after_stereo(
             opts.strategy,
             opts.objects,
             early.stereo.geometry,
+            share,
         )
         if early.colours and not result.rect.needs_resampling:
             # unknown objects that colour and shape name (recognition.colour); the points

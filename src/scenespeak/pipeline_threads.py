@@ -6,18 +6,22 @@ search that follows adds a detection in a minority of scenes (8 of 20 tuning sce
 of the default set, 2 of the 12 bench scenes), so the second thread, once free, runs the rest
 of the chain (objects, relations) on the first labelling as a :class:`Guess`: kept when the
 finer search adds nothing (the same computation on the same inputs), abandoned otherwise
-(``docs/architecture.md``, "One call, two threads").
+(``docs/architecture.md``, "One call, two threads"). The thread that labels makes the left
+image's plain background for the other one (:func:`plain_promise`, :func:`fill`) and, once its
+finer search is done, helps the guess with its objects' detections (:class:`Helper`).
 """
 
 from __future__ import annotations
 
+import queue
 import threading
 import time
 from collections.abc import Callable, Iterator
 from concurrent.futures import Executor, Future
 from contextlib import contextmanager
 from dataclasses import dataclass, replace
-from typing import Any
+from functools import partial
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -25,15 +29,34 @@ from numpy.typing import NDArray
 from scenespeak.description import SceneDescription
 from scenespeak.perception import plausibility, stereo
 from scenespeak.perception.features import Features
+from scenespeak.perception.recognition.results import Labelling
 from scenespeak.perception.scene_objects import StrategyOptions, geometry_for
 from scenespeak.perception.scene_regions import SceneGeometry
 from scenespeak.perception.stage_options import StereoOptions
 from scenespeak.perception.stereo import StereoResult
 
-__all__ = ["Guess", "InlineExecutor", "Say", "StereoStage", "stereo_stage", "timed"]
+if TYPE_CHECKING:
+    from scenespeak.pipeline import PipelineOptions
+
+__all__ = [
+    "Guess",
+    "Helper",
+    "InlineExecutor",
+    "Plain",
+    "Say",
+    "StereoStage",
+    "fill",
+    "label_and_finish",
+    "plain_promise",
+    "stereo_stage",
+    "timed",
+]
 
 #: A progress callback: called with each stage's name as it starts.
 Say = Callable[[str], None]
+
+#: The left image's plain background and textured pixels (``scene_objects.plain_for``).
+Plain = tuple[NDArray[np.bool_] | None, NDArray[np.bool_] | None]
 
 
 class InlineExecutor(Executor):
@@ -51,6 +74,50 @@ class InlineExecutor(Executor):
         except BaseException as exc:  # handed to whoever asks for the result, as a pool does
             future.set_exception(exc)
         return future
+
+
+class Helper(Executor):
+    """Tasks for a thread that waits for something else: ``submit`` queues them and that
+    thread runs them in :meth:`serve` until what it waits for is done.
+
+    The guess runs in the stereo thread while the labelling thread finishes the finer search
+    and then waits for the guess; the guess's shareable jobs
+    (``perception.sharing.run_shared``: the detections' regions and objects) go to this
+    executor, so the waiting thread takes some of them. A task still queued when its sharer
+    has done every job itself is cancelled there and skipped here.
+
+    >>> from concurrent.futures import ThreadPoolExecutor
+    >>> helper = Helper()
+    >>> with ThreadPoolExecutor(1) as pool:
+    ...     done = pool.submit(lambda: helper.submit(pow, 2, 10).result())
+    ...     helper.serve(done)
+    ...     done.result()
+    1024
+    """
+
+    def __init__(self) -> None:
+        self._tasks: queue.SimpleQueue[tuple[Future[Any], Callable[[], Any]] | None]
+        self._tasks = queue.SimpleQueue()
+
+    def submit(self, fn: Callable[..., Any], /, *args: Any, **kwargs: Any) -> Future[Any]:
+        """Queue ``fn(*args, **kwargs)`` for the thread in :meth:`serve`."""
+        future: Future[Any] = Future()
+        self._tasks.put((future, lambda: fn(*args, **kwargs)))
+        return future
+
+    def serve(self, until: Future[Any]) -> None:
+        """Run the queued tasks here, in order, until ``until`` is done."""
+        until.add_done_callback(lambda _done: self._tasks.put(None))
+        while (task := self._tasks.get()) is not None:
+            future, run = task
+            if not future.set_running_or_notify_cancel():
+                continue
+            try:
+                future.set_result(run())
+            except BaseException as exc:  # the sharer raises it; nothing waits forever
+                future.set_exception(exc)
+                if not isinstance(exc, Exception):
+                    raise
 
 
 class Abandoned(Exception):
@@ -89,8 +156,13 @@ class Guess:
         timings: dict[str, float] = {}
         return cls(pool.submit(run, timings, tell), timings, stop)
 
-    def adopt(self, timings: dict[str, float], say: Say) -> SceneDescription:
-        """The guess's description (its errors raised here), with ``timings`` and its own."""
+    def adopt(
+        self, timings: dict[str, float], say: Say, helper: Helper | None = None
+    ) -> SceneDescription:
+        """The guess's description (its errors raised here), with ``timings`` and its own;
+        meanwhile this thread runs the tasks the guess hands to ``helper``."""
+        if helper is not None:
+            helper.serve(self.future)
         found: SceneDescription = self.future.result()
         for stage in ("objects", "relations"):
             say(stage)
@@ -131,9 +203,11 @@ def stereo_stage(
     future_r: Future[Features],
     names: tuple[str, str],
     timings: dict[str, float],
+    plain: Future[Plain] | None = None,
 ) -> StereoStage:
     """The right image's features (from ``future_r``), then the stereo stage and the scene's
-    geometry (the second thread; ``timings`` gets "stereo" and "geometry")."""
+    geometry (the second thread; ``timings`` gets "stereo" and "geometry"); ``plain``: the
+    left image's plain parts (``scene_objects.plain_for``), made by the other thread."""
 
     left, right, rig = pair
     feats_r = future_r.result()
@@ -155,8 +229,64 @@ def stereo_stage(
     geometry = None
     if len(result.points.xyz):  # else the chain stops with _no_matches_error
         with timed(timings, "geometry"):
-            geometry = geometry_for((left.shape[0], left.shape[1]), result, opts[1], left)
+            shape = (left.shape[0], left.shape[1])
+            made = None if plain is None else plain.result
+            geometry = geometry_for(shape, result, opts[1], left, plain=made)
     return StereoStage(feats_r, result, geometry)
+
+
+def label_and_finish(
+    db: Any,
+    scene: tuple[Features, NDArray[np.generic]],
+    opts: PipelineOptions,
+    pool: Executor,
+    rest: Callable[[Labelling, Executor | None, dict[str, float], Say], SceneDescription],
+    stereo_done: Future[StereoStage],
+    timings: dict[str, float],
+    say: Say,
+) -> SceneDescription:
+    """:func:`scenespeak.pipeline.describe_scene`'s stage 2 and the rest: the first
+    labelling, the guess at the rest of the chain (two threads), the finer search; then the
+    guess kept (this thread helping it, :class:`Helper`) or ``rest`` run here on what the
+    finer search found (the other thread helping: ``pool``)."""
+    feats_l, left = scene
+    helper = Helper() if opts.threads > 1 else None
+    with timed(timings, "label"):
+        first: Labelling = db.label(feats_l, opts.labels)
+        guess = Guess.start(pool, partial(rest, first, helper)) if helper is not None else None
+        try:
+            # the finer search looks again where matches explain nothing; its boxes are
+            # shared with the stereo thread once that is free (same result)
+            labelling = db.look_closer(feats_l, first, left, opts.labels, executor=pool)
+        except BaseException:
+            if guess is not None:
+                guess.abandon()
+            raise
+        if guess is not None and labelling is not first:
+            guess.abandon()  # the finer search found more: the rest runs here
+    say("stereo")
+    with timed(timings, "wait"):
+        if guess is not None and labelling is first:
+            return guess.adopt(timings, say, helper)
+        stereo_done.result()
+    return rest(labelling, pool if helper is not None else None, timings, say)
+
+
+def plain_promise(threads: int, strategy: StrategyOptions) -> Future[Plain] | None:
+    """A future for the left image's plain parts (``scene_objects.plain_for``), which the
+    thread that labels makes while the stereo thread matches (:func:`fill`), when geometry
+    first may read them; None with one thread (the stereo stage makes them in its turn)."""
+    return Future() if threads > 1 and strategy.geometry and strategy.dense else None
+
+
+def fill(future: Future[Any], fn: Callable[..., Any], *args: Any) -> None:
+    """Set ``future``'s result to ``fn(*args)``; an exception it raises is set too (the thread
+    waiting for the result raises it: nothing waits forever) and raised here."""
+    try:
+        future.set_result(fn(*args))
+    except BaseException as exc:
+        future.set_exception(exc)
+        raise
 
 
 @contextmanager

@@ -39,6 +39,7 @@ enclosed by texture — plain regions reaching the image's border, the floor and
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -54,6 +55,7 @@ __all__ = [
     "components",
     "name_segments",
     "plain_background",
+    "plain_parts",
     "plain_pixels",
     "point_map",
     "scene_geometry",
@@ -443,6 +445,9 @@ def name_segments(
 #: before a textured wall: 0.005 %, whose few plain pixels are left as they are).
 PLAIN_SHARE = 0.1
 
+#: :func:`scene_geometry` segments every ``SEGMENT_STRIDE``-th pixel in both directions.
+SEGMENT_STRIDE = 2
+
 
 @dataclass(frozen=True, eq=False)
 class SceneGeometry:
@@ -468,8 +473,9 @@ def scene_geometry(
     up: NDArray[np.float64],
     shape: tuple[int, int],
     options: RegionOptions,
-    stride: int = 2,
+    stride: int = SEGMENT_STRIDE,
     image: NDArray[np.generic] | None = None,
+    plain: Callable[[], tuple[NDArray[np.bool_] | None, NDArray[np.bool_] | None]] | None = None,
 ) -> SceneGeometry:
     """Clean the dense map, lift it to 3-D, find the support plane and segment.
 
@@ -478,7 +484,9 @@ def scene_geometry(
     is still 20 pixels wide, 10 on that grid. With the left ``image`` (the dense map's grid:
     no resampling rectification), its plain background (:func:`plain_background`), when it
     covers at least :data:`PLAIN_SHARE` of the image, takes part in no segment and in no
-    support plane: SGBM carried its depth in from the objects beside it.
+    support plane: SGBM carried its depth in from the objects beside it. ``plain``: a call
+    that returns :func:`plain_parts` of ``image`` with these ``shape``, ``options`` and
+    ``stride``, already computed elsewhere (the pipeline's other thread).
     """
     from scenespeak.perception import stereo
 
@@ -491,12 +499,7 @@ def scene_geometry(
     xyz, xy = stereo.region_points(clean, grid, max_points=None)
     small_shape = ((h + st - 1) // st, (w + st - 1) // st)
     pm_small = point_map(xyz, xy / st, small_shape)
-    background = plain = None
-    if image is not None and np.asarray(image).shape[:2] == (h, w):
-        plain, horizontal = plain_pixels(image, options, st)
-        background = _background(plain, horizontal)
-    if background is not None and float(background.mean()) < PLAIN_SHARE:
-        background = None  # a textured scene: its depth is measured, leave it as it is
+    background, textured = plain() if plain is not None else plain_parts(image, shape, options, st)
     if background is not None:
         sx = np.clip(np.rint(xy[:, 0] / st).astype(np.intp), 0, small_shape[1] - 1)
         sy = np.clip(np.rint(xy[:, 1] / st).astype(np.intp), 0, small_shape[0] - 1)
@@ -515,7 +518,35 @@ def scene_geometry(
     labels = np.repeat(np.repeat(seg.labels, st, axis=0), st, axis=1)[:h, :w]
     pm = np.repeat(np.repeat(pm_small, st, axis=0), st, axis=1)[:h, :w]
     full = Segments(np.ascontiguousarray(labels), seg.sizes * st * st, seg.level)
-    textured = None
-    if background is not None and plain is not None:
-        textured = np.repeat(np.repeat(~plain, st, axis=0), st, axis=1)[:h, :w]
     return SceneGeometry(n, level, full, np.ascontiguousarray(pm), textured)
+
+
+def plain_parts(
+    image: NDArray[np.generic] | None,
+    shape: tuple[int, int],
+    options: RegionOptions,
+    stride: int = SEGMENT_STRIDE,
+) -> tuple[NDArray[np.bool_] | None, NDArray[np.bool_] | None]:
+    """What :func:`scene_geometry` takes from the left ``image`` alone: its plain background
+    on the ``stride`` grid (:func:`plain_background`) and the full-size mask of its pixels
+    that are not plain (:attr:`SceneGeometry.textured`); ``(None, None)`` without an image of
+    the map's ``shape`` or when the background covers less than :data:`PLAIN_SHARE` of it.
+
+    It needs no stereo, so the pipeline computes it in the thread that labels while the other
+    one matches (``scene_geometry(..., plain=)``).
+
+    >>> img = np.zeros((40, 60), np.uint8); img[10:30, 20:40] = 200
+    >>> background, textured = plain_parts(img, (40, 60), RegionOptions())
+    >>> background.shape, textured.shape, bool(background[0, 0]), bool(textured[10, 30])
+    ((20, 30), (40, 60), True, True)
+    """
+    h, w = shape
+    if image is None or np.asarray(image).shape[:2] != (h, w):
+        return None, None
+    st = max(int(stride), 1)
+    plain, horizontal = plain_pixels(image, options, st)
+    background = _background(plain, horizontal)
+    if float(background.mean()) < PLAIN_SHARE:
+        return None, None  # a textured scene: its depth is measured, leave it as it is
+    textured = np.repeat(np.repeat(~plain, st, axis=0), st, axis=1)[:h, :w]
+    return background, textured

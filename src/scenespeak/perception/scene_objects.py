@@ -17,7 +17,8 @@ with the reason.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
+from concurrent.futures import Executor
 from dataclasses import dataclass, replace
 from typing import TYPE_CHECKING
 
@@ -40,7 +41,14 @@ from scenespeak.perception.stereo import StereoResult
 if TYPE_CHECKING:
     from scenespeak.perception.scene_regions import SceneGeometry
 
-__all__ = ["StrategyOptions", "geometry_for", "outline_mask", "points_inside", "scene_objects"]
+__all__ = [
+    "StrategyOptions",
+    "geometry_for",
+    "outline_mask",
+    "plain_for",
+    "points_inside",
+    "scene_objects",
+]
 
 
 @dataclass(frozen=True)
@@ -90,6 +98,7 @@ def scene_objects(
     strategy: StrategyOptions,
     objects: ObjectOptions,
     geometry: SceneGeometry | None = None,
+    executor: Executor | None = None,
 ) -> tuple[tuple[SceneObject, ...], list[Skipped]]:
     """The scene's objects by the strategy of ``strategy`` (module docstring).
 
@@ -109,12 +118,14 @@ def scene_objects(
     geometry : SceneGeometry, optional
         Geometry first's support plane and segments, when already computed
         (:func:`geometry_for`); None: computed here when the strategy uses them.
+    executor : Executor, optional
+        Geometry first shares its detections' work with one task of it (the same result).
     """
     shape = images[0].shape[:2]
     resampled = bool(result.rect.needs_resampling)
     if strategy.uses_geometry(dense_map=result.dense is not None, resampled=resampled):
         return _geometry_objects(
-            (shape[0], shape[1]), result, labelling, objects, id_to_label, geometry
+            (shape[0], shape[1]), result, labelling, objects, id_to_label, geometry, executor
         )
     return _outline_objects(images, result, labelling, strategy, objects)
 
@@ -124,12 +135,14 @@ def geometry_for(
     result: StereoResult,
     strategy: StrategyOptions,
     image: NDArray[np.generic] | None = None,
+    plain: Callable[[], tuple[NDArray[np.bool_] | None, NDArray[np.bool_] | None]] | None = None,
 ) -> SceneGeometry | None:
     """The support plane and segments :func:`scene_objects` will use with this strategy (None
     when it uses none): they need the stereo stage only, not the labels, so the pipeline
     computes them in its stereo thread while this one labels (the call
     :func:`scenespeak.perception.scene_regions.objects_from_regions` makes, plus the left
-    ``image`` whose plain background takes part in no segment)."""
+    ``image`` whose plain background takes part in no segment; ``plain``: a call returning
+    :func:`plain_for` of that image, when another thread makes it)."""
     resampled = bool(result.rect.needs_resampling)
     if result.dense is None or not strategy.uses_geometry(dense_map=True, resampled=resampled):
         return None
@@ -137,7 +150,19 @@ def geometry_for(
 
     up = np.asarray(result.rect.rig.up, dtype=np.float64)
     regions = RegionStageOptions().regions
-    return scene_geometry(result.dense, up, (shape[0], shape[1]), regions, image=image)
+    return scene_geometry(result.dense, up, (shape[0], shape[1]), regions, image=image, plain=plain)
+
+
+def plain_for(
+    image: NDArray[np.generic], shape: tuple[int, int]
+) -> tuple[NDArray[np.bool_] | None, NDArray[np.bool_] | None]:
+    """What :func:`geometry_for` takes from the left image alone (its plain background and
+    textured pixels, :func:`scenespeak.perception.regions.plain_parts`): it needs no stereo,
+    so the pipeline makes it in the labelling thread and hands it to ``geometry_for(plain=)``."""
+    from scenespeak.perception.regions import plain_parts
+    from scenespeak.perception.scene_regions import RegionStageOptions
+
+    return plain_parts(image, (shape[0], shape[1]), RegionStageOptions().regions)
 
 
 def _geometry_objects(
@@ -147,8 +172,10 @@ def _geometry_objects(
     o: ObjectOptions,
     id_to_label: Mapping[int, str],
     geometry: SceneGeometry | None = None,
+    executor: Executor | None = None,
 ) -> tuple[tuple[SceneObject, ...], list[Skipped]]:
-    """Geometry first (``perception.scene_regions``): named segments, votes, unknown segments."""
+    """Geometry first (``perception.scene_regions``): named segments, votes, unknown segments
+    (``executor``: shares the detections' work, the same result)."""
     from scenespeak.perception.scene_regions import SceneInputs, objects_from_regions
 
     xy = np.asarray(result.features_left.xy, dtype=np.float64)
@@ -158,7 +185,7 @@ def _geometry_objects(
     )
     # the outlier radius is scaled to each object (objects.scaled_radius), not o.radius
     kw = {"outliers": o.outliers, "eps": o.eps, "min_points": o.min_points}
-    objs, skipped, _geo = objects_from_regions(inputs, object_options=kw)
+    objs, skipped, _geo = objects_from_regions(inputs, object_options=kw, executor=executor)
     return tuple(objs), skipped
 
 

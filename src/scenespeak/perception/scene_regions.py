@@ -18,7 +18,9 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from concurrent.futures import Executor
 from dataclasses import dataclass, field
+from functools import partial
 from typing import Any
 
 import cv2
@@ -44,6 +46,7 @@ from scenespeak.perception.scene_unknown import (
     unknown_segments,
     vote_segments,
 )
+from scenespeak.perception.sharing import run_shared
 
 __all__ = [
     "RegionStageOptions",
@@ -286,6 +289,7 @@ def objects_from_regions(
     inputs: SceneInputs,
     options: RegionStageOptions | None = None,
     object_options: dict[str, Any] | None = None,
+    executor: Executor | None = None,
 ) -> tuple[list[SceneObject], list[Skipped], SceneGeometry | None]:
     """Objects of a scene: named segments, segments named by votes, then unknown segments.
 
@@ -296,6 +300,9 @@ def objects_from_regions(
     object_options : dict, optional
         Passed to :func:`~scenespeak.perception.objects.make_object` (``outliers``, ``eps``,
         ``min_points``; ``radius`` defaults to the object-scaled radius).
+    executor : Executor, optional
+        Shares the detections' outlines and objects with one task of it
+        (:func:`~scenespeak.perception.sharing.run_shared`: the same result without it).
 
     Returns
     -------
@@ -320,17 +327,11 @@ def objects_from_regions(
     xyz = np.asarray(inp.points.xyz, dtype=np.float64)
     left_index = np.asarray(inp.points.left_index, dtype=np.intp)
     own = [xyz[np.isin(left_index, np.asarray(d.inliers, np.intp))] for d in dets]
-    work = _Work(
-        inp,
-        opts,
-        {"radius": None, **(object_options or {})},
-        geo,
-        [_outline_mask(d.outline_in_scene, inp.shape, opts.outline_grow) for d in dets],
-        seg_of,
-        owners,
-        own,
-    )
-    objects, skipped = _detected_objects(work, dets)
+    grow = opts.outline_grow
+    outlines = [partial(_outline_mask, d.outline_in_scene, inp.shape, grow) for d in dets]
+    kw = {"radius": None, **(object_options or {})}
+    work = _Work(inp, opts, kw, geo, run_shared(outlines, executor), seg_of, owners, own)
+    objects, skipped = _detected_objects(work, dets, executor)
     if geo is None:
         return objects, skipped, geo
     residual = _residual(geo, work.taken, opts)
@@ -343,13 +344,20 @@ def objects_from_regions(
     return [volume_centre(o, inp.up) for o in objects], skipped, geo
 
 
-def _detected_objects(work: _Work, dets: list[Any]) -> tuple[list[SceneObject], list[Skipped]]:
+def _detected_objects(
+    work: _Work, dets: list[Any], executor: Executor | None = None
+) -> tuple[list[SceneObject], list[Skipped]]:
     """The detections' objects and those not placed; with the geometry, instances checked
-    and joined in metres (:mod:`~scenespeak.perception.scene_instances`)."""
+    and joined in metres (:mod:`~scenespeak.perception.scene_instances`). Each detection's
+    object depends on its own inputs only (shared with ``executor``, taken in order after)."""
     placed: list[tuple[SceneObject, NDArray[np.float64], int]] = []
     skipped: list[Skipped] = []
-    for i, det in enumerate(dets):
-        got = _known_object(work, i, det)
+    made = run_shared(
+        [partial(_known_object, work, i, det) for i, det in enumerate(dets)], executor
+    )
+    for i, (det, (got, taken)) in enumerate(zip(dets, made, strict=True)):
+        if taken is not None:
+            work.taken.append(taken)
         if isinstance(got, SceneObject):
             placed.append((got, np.asarray(det.outline_in_scene, np.float64), work.seg_of[i]))
         else:
@@ -396,17 +404,20 @@ def volume_centre(obj: SceneObject, up: NDArray[np.float64]) -> SceneObject:
     return dataclasses.replace(obj, centroid=centre)
 
 
-def _known_object(work: _Work, i: int, det: Any) -> SceneObject | Skipped:
-    """One detection: its segment (or outline) points agreeing with its keypoints' depth."""
+def _known_object(
+    work: _Work, i: int, det: Any
+) -> tuple[SceneObject | Skipped, NDArray[np.bool_] | None]:
+    """One detection: its segment (or outline) points agreeing with its keypoints' depth; and
+    the pixels it takes from the unknown objects (:func:`_taken`; None without geometry)."""
     inp, opts, geo = work.inp, work.opts, work.geo
     name = getattr(det, "name", "") or det.label
     own_kp = work.own[i]
     dense_pts = np.zeros((0, 3))
-    region_note = None
+    region_note = taken = None
     if geo is not None:
-        placed = _own_region(work, i)
+        placed, taken = _own_region(work, i)
         if isinstance(placed, str):
-            return Skipped(name, placed)
+            return Skipped(name, placed), taken
         region, region_note = placed
         dense_pts = geo.points[region].astype(np.float64)
         dense_pts = dense_pts[np.all(np.isfinite(dense_pts), axis=1)]
@@ -425,17 +436,19 @@ def _known_object(work: _Work, i: int, det: Any) -> SceneObject | Skipped:
                 "recognised in the left image, but none of its keypoints was matched "
                 "in the right image"
             )
-        return Skipped(name, f"{reason}; {note}" if note else reason)
+        return Skipped(name, f"{reason}; {note}" if note else reason), taken
     notes = (*result.notes, note) if note else result.notes
     if region_note:
         notes = (*notes, region_note)
     conf = detection_confidence(int(det.score))
-    return dataclasses.replace(result, name=name, confidence=conf, notes=tuple(notes))
+    return dataclasses.replace(result, name=name, confidence=conf, notes=tuple(notes)), taken
 
 
-def _own_region(work: _Work, i: int) -> tuple[NDArray[np.bool_], str | None] | str:
+def _own_region(
+    work: _Work, i: int
+) -> tuple[tuple[NDArray[np.bool_], str | None] | str, NDArray[np.bool_]]:
     """The pixels that place detection ``i`` and a note on where they came from, or why it is
-    not placed.
+    not placed; and what it takes from the unknown objects (:func:`_taken`).
 
     The depth of a region must come from the object itself: its keypoints with a stereo depth
     (:func:`_agreeing` keeps the region's points at their depth), or, without any, a segment
@@ -452,24 +465,25 @@ def _own_region(work: _Work, i: int) -> tuple[NDArray[np.bool_], str | None] | s
     det = work.inp.labelling.detections[i]
     above = geo.segments.labels >= 0
     region = _region_for(work, i)
-    work.taken.append(_taken(work, i, region, above))
+    taken = _taken(work, i, region, above)
     has_depth = len(work.own[i]) > 0
     if region is not None and (has_depth or len(work.owners.get(work.seg_of[i], [])) == 1):
-        return region, None
+        return (region, None), taken
     why = "their segment holds other objects"
     if region is None:
         outline = _outline_mask(det.outline_in_scene, work.inp.shape, 0.0) & above
         if has_depth:
-            return outline, "no segment held its keypoints: points from its outline"
+            return (outline, "no segment held its keypoints: points from its outline"), taken
         lone = _lone_segment(work, i, outline)
         if lone is not None:
-            return lone, "no keypoint depth: placed by the one unclaimed segment in its outline"
+            note = "no keypoint depth: placed by the one unclaimed segment in its outline"
+            return (lone, note), taken
         why = "no segment of its own holds them"
     return (
         f"recognised in the left image ({len(det.inliers)} keypoints), but none of its keypoints "
         f"has a stereo depth and {why}: not placed, so that what stands in front of it does "
         "not lend it its depth"
-    )
+    ), taken
 
 
 def _taken(
