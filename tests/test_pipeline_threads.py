@@ -157,3 +157,22 @@ def test_a_helper_skips_what_its_sharer_cancelled_and_passes_errors_back() -> No
         done = pool.submit(lambda: helper.submit(failing).exception(5))
         helper.serve(done)
         assert isinstance(done.result(), ImageError)
+
+
+def test_short_gil_slices_shorten_the_interval_inside_and_put_it_back() -> None:
+    import sys
+
+    from scenespeak.pipeline_threads import short_gil_slices
+
+    before = sys.getswitchinterval()
+    try:
+        sys.setswitchinterval(0.005)
+        with short_gil_slices(0.0005):
+            assert sys.getswitchinterval() == pytest.approx(0.0005)
+        assert sys.getswitchinterval() == pytest.approx(0.005)
+        sys.setswitchinterval(0.0001)  # already shorter: left alone
+        with short_gil_slices(0.0005):
+            assert sys.getswitchinterval() == pytest.approx(0.0001)
+        assert sys.getswitchinterval() == pytest.approx(0.0001)
+    finally:
+        sys.setswitchinterval(before)
