@@ -57,8 +57,8 @@ __all__ = [
 #: A progress callback: called with each stage's name as it starts.
 Say = Callable[[str], None]
 
-#: The left image's plain background and textured pixels (``scene_objects.plain_for``).
-Plain = tuple[NDArray[np.bool_] | None, NDArray[np.bool_] | None]
+#: The left image's plain backgrounds and textured pixels (``scene_objects.plain_for``).
+Plain = tuple[NDArray[np.bool_] | None, NDArray[np.bool_] | None, NDArray[np.bool_] | None]
 
 
 class InlineExecutor(Executor):

@@ -168,6 +168,38 @@ def test_the_plain_floor_between_two_boxes_does_not_join_them() -> None:
     assert seg.labels[70, 75] >= 0  # the plain face inside its edges is kept
 
 
+def test_the_plain_background_reaches_up_to_an_objects_edge() -> None:
+    """Over the 7-pixel texture window a floor pixel within 3-4 pixels of an object's edge is
+    textured, so every segment had a band of floor round it (16-34 % of a far cylinder's
+    segment on tuning-40); the finer window takes the floor up to 1-2 pixels of the edge."""
+    rng = np.random.default_rng(2)
+    gray = np.full((60, 80), 120, np.uint8)
+    gray[20:40, 30:50] = rng.integers(0, 255, (20, 20))
+    coarse = plain_background(gray, RegionOptions(edge_window=0))
+    fine = plain_background(gray)
+    assert not coarse[30, 27] and fine[30, 27]  # 3 px left of the box: floor now
+    assert not coarse[17, 40] and fine[17, 40]  # 3 px above it
+    assert not fine[20:40, 30:50].any()  # the box itself stays
+    assert not fine[30, 29]  # the pixel next to its edge (its Sobel sees the edge)
+
+
+def test_the_finer_background_does_not_flood_a_face_through_a_gap() -> None:
+    """A face of the floor's own gray whose edge has a 5-pixel gap: the 7-pixel window does
+    not pass the gap, the finer one does (unbounded, it would flood the face); it grows only
+    as deep as the band the larger window added, so the face's inside stays out."""
+    from scenespeak.perception.plain import _background, _plain_masks
+
+    gray = np.full((60, 80), 120, np.uint8)
+    gray[10:50, 20:60] = 30  # a dark ring (the face's edges) ...
+    gray[13:47, 23:57] = 120  # ... round a face of the floor's gray
+    gray[27:32, 20:23] = 120  # a 5-pixel gap in its left edge
+    plain, edge, fine, _reach = _plain_masks(gray, RegionOptions(), 1)
+    assert fine is not None and _background(plain, edge, fine, 100)[30, 40]  # would flood
+    bg = plain_background(gray)
+    assert bg[2, 2] and not bg[30, 40]
+    assert not bg[30, 30]  # 7 px inside the gap
+
+
 def test_plain_background_is_off_for_a_noisy_camera_and_at_zero() -> None:
     gray, _z, _h = _smeared_row_scene()
     noisy = np.clip(gray + np.random.default_rng(0).normal(0, 2, gray.shape), 0, 255)
@@ -230,3 +262,37 @@ def test_unknown_segments_with_the_plain_background_out_need_texture_not_keypoin
     plain_face = np.ones((h, w), bool)
     plain_face[14:36, 14:36] = False  # plain inside its edges: 46 % textured
     assert found(plain_face) == 0
+
+
+def test_a_sliver_away_from_the_keypoints_does_not_leave_a_far_object_unplaced() -> None:
+    """A far object with no keypoint depth is placed by the one unclaimed segment in its
+    outline next to its keypoints; on the default set a 72-pixel sliver 22 pixels from them
+    made two candidates and the shoebox was not placed. Two segments both next to them are
+    still two: then it is not placed."""
+    from types import SimpleNamespace
+    from typing import Any
+
+    from scenespeak.perception.scene_regions import _lone_segment
+
+    h, w = 60, 80
+    labels = np.full((h, w), -1, np.int32)
+    labels[20:40, 20:40] = 0  # the object's visible part, its keypoints on it
+    labels[5:8, 60:70] = 1  # a sliver inside the outline, far from them
+    seg = Segments(labels, np.array([400, 30]), 0.0)
+    outline = np.zeros((h, w), bool)
+    outline[0:50, 10:75] = True
+    det = SimpleNamespace(inliers=np.array([0, 1, 2]))
+    work: Any = SimpleNamespace(
+        geo=SimpleNamespace(segments=seg),
+        opts=RegionStageOptions(),
+        owners={},
+        inp=SimpleNamespace(
+            keypoints_xy=np.array([[25.0, 25.0], [30.0, 30.0], [35.0, 28.0]]),
+            labelling=SimpleNamespace(detections=[det]),
+        ),
+    )
+    region = _lone_segment(work, 0, outline)
+    assert region is not None and region[30, 30] and not region[6, 65]
+    labels[20:40, 42:50] = 2  # another unclaimed segment right beside the keypoints
+    work.geo = SimpleNamespace(segments=Segments(labels, np.array([400, 30, 160]), 0.0))
+    assert _lone_segment(work, 0, outline) is None

@@ -39,6 +39,7 @@ from scenespeak.perception.recognition.results import Labelling
 from scenespeak.perception.stereo import StereoResult
 
 if TYPE_CHECKING:
+    from scenespeak.perception.regions import PlainParts
     from scenespeak.perception.scene_regions import SceneGeometry
 
 __all__ = [
@@ -135,7 +136,7 @@ def geometry_for(
     result: StereoResult,
     strategy: StrategyOptions,
     image: NDArray[np.generic] | None = None,
-    plain: Callable[[], tuple[NDArray[np.bool_] | None, NDArray[np.bool_] | None]] | None = None,
+    plain: Callable[[], PlainParts] | None = None,
 ) -> SceneGeometry | None:
     """The support plane and segments :func:`scene_objects` will use with this strategy (None
     when it uses none): they need the stereo stage only, not the labels, so the pipeline
@@ -153,10 +154,8 @@ def geometry_for(
     return scene_geometry(result.dense, up, (shape[0], shape[1]), regions, image=image, plain=plain)
 
 
-def plain_for(
-    image: NDArray[np.generic], shape: tuple[int, int]
-) -> tuple[NDArray[np.bool_] | None, NDArray[np.bool_] | None]:
-    """What :func:`geometry_for` takes from the left image alone (its plain background and
+def plain_for(image: NDArray[np.generic], shape: tuple[int, int]) -> PlainParts:
+    """What :func:`geometry_for` takes from the left image alone (its plain backgrounds and
     textured pixels, :func:`scenespeak.perception.regions.plain_parts`): it needs no stereo,
     so the pipeline makes it in the labelling thread and hands it to ``geometry_for(plain=)``."""
     from scenespeak.perception.regions import plain_parts
