@@ -544,3 +544,43 @@ def test_band_pairs_are_every_in_band_pair_with_its_exact_distance(chunk: int) -
     for g, w in zip(got, want, strict=True):
         assert g.dtype == w.dtype or g.dtype.kind == w.dtype.kind == "i"
         np.testing.assert_array_equal(g, w)
+
+
+def _lexsort_group_best(
+    ii: np.ndarray, jj: np.ndarray, dd: np.ndarray, n: int, rxy: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``matching._group_best`` as it was before issue 16 session 8 (a two-key lexsort)."""
+    best = np.full(n, -1, np.intp)
+    d1 = np.full(n, np.inf, np.float32)
+    d2 = np.full(n, np.inf, np.float32)
+    o = np.lexsort((dd, ii))
+    ii, jj, dd = ii[o], jj[o], dd[o]
+    first = np.flatnonzero(np.r_[True, ii[1:] != ii[:-1]])
+    best[ii[first]] = jj[first]
+    d1[ii[first]] = dd[first]
+    far = np.linalg.norm(rxy[jj] - rxy[best[ii]], axis=1) > 2.0
+    fi = np.flatnonzero(far)
+    grp = ii[fi]
+    f2 = fi[np.r_[True, grp[1:] != grp[:-1]]]
+    d2[ii[f2]] = dd[f2]
+    return best, d1, d2
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_group_best_keeps_the_lexsort_order_of_ties(seed: int) -> None:
+    # few distinct distances (many exact ties, zeros among them) and right keypoints on a
+    # coarse grid (many at the same place): which of two equally near ones is best matters
+    from scenespeak.perception.stereo.matching import _group_best
+
+    rng = np.random.default_rng(seed)
+    n, m, pairs = 300, 200, 6000
+    ii = rng.integers(0, n, pairs).astype(np.intp)
+    jj = rng.integers(0, m, pairs).astype(np.intp)
+    dd = np.sqrt(rng.integers(0, 40, pairs).astype(np.float32))
+    rxy = rng.integers(0, 6, (m, 2)).astype(np.float64) * 1.5
+    got = _group_best(ii, jj, dd, n + 5, rxy)
+    want = _lexsort_group_best(ii, jj, dd, n + 5, rxy)
+    for g, w in zip(got, want, strict=True):
+        assert g.dtype == w.dtype
+        np.testing.assert_array_equal(g, w)
+    assert np.sum(got[0] >= 0) > 250 and np.isfinite(got[2]).sum() > 100

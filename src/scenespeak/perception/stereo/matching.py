@@ -52,13 +52,22 @@ def _group_best(
     n: int,
     rxy: NDArray[np.float64],
 ) -> tuple[NDArray[np.intp], NDArray[np.float32], NDArray[np.float32]]:
-    """Best and second best (at another place) per group ``ii`` of candidate pairs."""
+    """Best and second best (at another place) per group ``ii`` of candidate pairs.
+
+    The pairs are ordered by group, then distance, then as given: ``np.lexsort((dd, ii))``'s
+    order, from one stable sort of a 64-bit key (the group in the high half, the distance's
+    float32 bits in the low half; a non-negative float32's bits order as its value), about
+    5x faster than the two-key sort (issue 16). ``ii`` are indices (0 <= ii < 2**32), ``dd``
+    non-negative distances.
+    """
     best = np.full(n, -1, np.intp)
     d1 = np.full(n, np.inf, np.float32)
     d2 = np.full(n, np.inf, np.float32)
     if len(ii) == 0:
         return best, d1, d2
-    o = np.lexsort((dd, ii))
+    key = np.asarray(ii).astype(np.uint64) << np.uint64(32)
+    key |= np.asarray(dd, np.float32).view(np.uint32)
+    o = np.argsort(key, kind="stable")
     ii, jj, dd = ii[o], jj[o], dd[o]
     first = np.flatnonzero(np.r_[True, ii[1:] != ii[:-1]])
     best[ii[first]] = jj[first]
