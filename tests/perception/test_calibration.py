@@ -323,6 +323,28 @@ def test_rectify_images_resamples_unrectified_pairs() -> None:
     assert (a == 0).any()
 
 
+def test_rectify_images_of_a_window_are_the_whole_images_part() -> None:
+    # cv2.remap computes each output pixel from its own map entries: the window's maps give
+    # the window's pixels bit for bit (the dense map rectifies only its crop, issue 16)
+    rig = _unrectified_rig()
+    rect = rectify(rig)
+    rng = np.random.default_rng(16)
+    img = cv2.GaussianBlur(rng.integers(0, 256, (480, 640), dtype=np.uint8), (0, 0), 1.5)
+    img2 = np.roll(img, 7, axis=1)
+    whole = rect.rectify_images(img, img2)
+    for window in ((0, 0, 640, 480), (13, 200, 611, 201), (0, 5, 1, 480), (300, 0, 640, 47)):
+        x0, y0, x1, y1 = window
+        part = rect.rectify_images(img, img2, window=window)
+        for p, w in zip(part, whole, strict=True):
+            assert p.shape == (y1 - y0, x1 - x0)
+            np.testing.assert_array_equal(p, w[y0:y1, x0:x1])
+    # an already rectified rig: views of the images
+    plain = rectify(rig_from_short(0.12, 60.0, (640, 480)))
+    a, b = plain.rectify_images(img, img2, window=(3, 4, 50, 60))
+    assert np.shares_memory(a, img) and a.shape == (56, 47)
+    np.testing.assert_array_equal(b, img2[4:60, 3:50])
+
+
 # ------------------------------------------------------------------------------------------
 # ground frame
 

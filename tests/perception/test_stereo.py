@@ -584,3 +584,40 @@ def test_group_best_keeps_the_lexsort_order_of_ties(seed: int) -> None:
         assert g.dtype == w.dtype
         np.testing.assert_array_equal(g, w)
     assert np.sum(got[0] >= 0) > 250 and np.isfinite(got[2]).sum() > 100
+
+
+def test_dense_map_of_an_unrectified_rig_rectifies_only_its_crop() -> None:
+    # dense_disparity resamples only the crop it hands to SGBM (issue 16); the map is the one
+    # of the whole images rectified first (the same Rectification without its maps: it then
+    # takes the images as they are), for crops inside, at the edges and the whole image
+    from dataclasses import replace
+
+    import cv2
+
+    from cardscene import card_pair
+    from scenespeak.perception.calibration import StereoRig
+
+    left, right = card_pair({"astronaut": (-0.1, 1.2, 0.2), "chelsea": (0.15, 1.0, 0.2)})
+    h, w = left.shape[:2]
+    R, _ = cv2.Rodrigues(np.array([0.004, -0.01, 0.002]))
+    K1 = np.array([[0.9 * w, 0.0, w / 2 + 3], [0.0, 0.9 * w, h / 2 - 2], [0.0, 0.0, 1.0]])
+    K2 = K1 + np.array([[2.0, 0, -4], [0, 2.0, 3], [0, 0, 0]])
+    D1, D2 = np.array([-0.05, 0.01, 0, 0, 0]), np.array([-0.04, 0.01, 0, 0, 0])
+    rig = StereoRig((w, h), K1, K2, D1, D2, R, np.array([-0.1, 0.001, 0.0]))
+    rect = rectify(rig)
+    assert rect.needs_resampling
+    from scenespeak.perception.features import to_gray
+
+    whole = rect.rectify_images(to_gray(left), to_gray(right))
+    flat = replace(rect, maps_left=None, maps_right=None)
+    kd = np.array([20.0, 21.0, 22.0, 40.0, 41.0, 41.5])
+    for roi in (None, (40, 30, 200, 150), (0, 0, 60, h), (w - 50, h - 40, w, h)):
+        got = dense_disparity(left, right, rect, keypoint_disparities=kd, roi=roi, pad=16)
+        want = dense_disparity(*whole, flat, keypoint_disparities=kd, roi=roi, pad=16)
+        assert np.isfinite(got.disparity).sum() > 100
+        assert (got.min_disparity, got.num_disparities, got.roi) == (
+            want.min_disparity,
+            want.num_disparities,
+            want.roi,
+        )
+        np.testing.assert_array_equal(got.disparity, want.disparity)

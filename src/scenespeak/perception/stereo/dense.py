@@ -105,8 +105,8 @@ def dense_disparity(
     gr = to_gray(right)
     if gl.shape != gr.shape:
         raise ImageError("dense_disparity", f"images differ in size: {gl.shape} vs {gr.shape}")
-    gl, gr = (np.asarray(g, dtype=np.uint8) for g in rect.rectify_images(gl, gr))
-    h, w = gl.shape
+    # the rectified images' size (the maps'); only the crop below is rectified
+    h, w = gl.shape if rect.maps_left is None else rect.maps_left[0].shape
     kd = None if keypoint_disparities is None else np.asarray(keypoint_disparities, float)
     mn_auto, num_auto = _disparity_range(rect, kd)
     mn = mn_auto if o.min_disparity is None else int(o.min_disparity)
@@ -130,8 +130,12 @@ def dense_disparity(
     xa = max(0, xa)
     ya, yb = max(0, y0 - pad), min(h, y1 + pad)
     xb = min(w, x1 + pad)
-    cl = np.ascontiguousarray(gl[ya:yb, xa:xb])
-    cr = np.ascontiguousarray(gr[ya:yb, xa:xb])
+    # the crop of the rectified pair: only its pixels are resampled (the whole images' remap
+    # cost 2 full-size passes for a crop that may be a small part; the same pixels)
+    cl, cr = (
+        np.ascontiguousarray(g, dtype=np.uint8)
+        for g in rect.rectify_images(gl, gr, window=(xa, ya, xb, yb))
+    )
     if border:
         cl = np.asarray(cv2.copyMakeBorder(cl, 0, 0, border, 0, cv2.BORDER_CONSTANT, value=0))
         cr = np.asarray(cv2.copyMakeBorder(cr, 0, 0, border, 0, cv2.BORDER_CONSTANT, value=0))
