@@ -40,10 +40,9 @@ import threading
 from collections.abc import Iterator
 from os import PathLike
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-import yaml
 from numpy.typing import NDArray
 
 from scenespeak import limits as _limits
@@ -57,6 +56,9 @@ from scenespeak.safetext import (
     read_bytes,
     read_text,
 )
+
+if TYPE_CHECKING:  # PyYAML is imported when YAML is read (~20 ms of every command's start-up)
+    import yaml
 
 __all__ = [
     "as_path",
@@ -138,6 +140,8 @@ def _check_tag(n: yaml.Node, source: str | PathLike[str], error: ErrorType) -> N
 
 def _yaml_children(n: yaml.Node) -> list[yaml.Node]:
     """A node's children: a sequence's items, a mapping's keys and values."""
+    import yaml
+
     if isinstance(n, yaml.SequenceNode):
         return list(n.value)
     if isinstance(n, yaml.MappingNode):
@@ -193,14 +197,19 @@ def load_yaml(
     text: str,
     source: str | PathLike[str],
     *,
-    loader: type[yaml.SafeLoader] = yaml.SafeLoader,
+    loader: type[yaml.SafeLoader] | None = None,
     error: ErrorType = InputError,
 ) -> Any:
     """Parse YAML safely: no python tags, aliases bounded, nesting and numbers bounded.
 
     ``loader`` must derive from :class:`yaml.SafeLoader` (e.g. one that adds OpenCV's
-    ``!!opencv-matrix``; those tags are under ``tag:yaml.org,2002:`` and allowed).
+    ``!!opencv-matrix``; those tags are under ``tag:yaml.org,2002:`` and allowed); None:
+    :class:`yaml.SafeLoader`.
     """
+    import yaml
+
+    if loader is None:
+        loader = yaml.SafeLoader
     lines = text.splitlines()
     if lines and lines[0].startswith("%YAML"):
         lines = lines[1:]  # OpenCV writes "%YAML:1.0", which PyYAML rejects

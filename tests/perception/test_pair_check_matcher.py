@@ -74,3 +74,23 @@ def test_fewer_than_two_right_descriptors_match_nothing() -> None:
     d = np.arange(256, dtype=np.uint8).reshape(2, 128)
     assert _numpy(d, d[:1], 0.7) == _opencv(d, d[:1], 0.7) == []
     assert _numpy(d[:0], d, 0.7) == []
+
+
+@pytest.mark.parametrize("n", [1, 2, 3, 4, 7, 10, 101, 1000])
+def test_median_is_numpys(n: int) -> None:
+    from scenespeak.perception.plausibility import _median
+
+    rng = np.random.default_rng(n)
+    for x in (
+        rng.normal(0, 1e3, n),
+        rng.integers(0, 3, n).astype(np.float64),  # ties
+        np.r_[rng.normal(0, 1, n - 1), np.inf],
+        np.r_[rng.normal(0, 1, n - 1), -np.inf],
+        np.r_[rng.normal(0, 1, n - 1), np.nan],
+        np.full(n, 1e308),  # the two middle ones' sum overflows, as in np.mean
+    ):
+        with np.errstate(over="ignore", invalid="ignore"):
+            want = float(np.median(x))
+            got = _median(x)
+        assert got == want or (np.isnan(got) and np.isnan(want)), (x, got, want)
+        assert np.float64(got).tobytes() == np.float64(want).tobytes() or np.isnan(want)

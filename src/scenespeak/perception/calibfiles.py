@@ -29,27 +29,15 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import yaml
 
 from scenespeak import safeio
 from scenespeak.errors import CalibrationError
 from scenespeak.perception.calibration import StereoRig, load_ros_rig, rig_from_mapping
+from scenespeak.perception.rig_readers import _opencv_yaml_loader
 
 __all__ = ["parse_calibration", "read_calibration", "read_calibration_pair"]
 
 _MAX_MATRIX = 10_000  # elements of one calibration matrix (the largest real one has 14)
-
-
-class _Loader(yaml.SafeLoader):
-    """Safe YAML plus OpenCV FileStorage's ``!!opencv-matrix`` tags."""
-
-
-def _matrix(loader: yaml.SafeLoader, node: yaml.Node) -> dict[str, Any]:
-    return dict(loader.construct_mapping(node, deep=True))
-
-
-for _tag in ("tag:yaml.org,2002:opencv-matrix", "tag:yaml.org,2002:opencv-nd-matrix"):
-    _Loader.add_constructor(_tag, _matrix)
 
 
 def _check_matrices(data: Any, source: Path) -> None:
@@ -203,7 +191,7 @@ def parse_calibration(path: str | PathLike[str]) -> dict[str, Any]:
     if suffix == ".json" or (suffix not in (".yml", ".yaml") and text.lstrip()[:1] == "{"):
         data = safeio.load_json(text, p, error=CalibrationError)
     else:
-        data = safeio.load_yaml(text, p, loader=_Loader, error=CalibrationError)
+        data = safeio.load_yaml(text, p, loader=_opencv_yaml_loader(), error=CalibrationError)
     if not isinstance(data, Mapping):
         raise CalibrationError(p, "expected a mapping of calibration keys at the top level")
     _check_matrices(data, p)
