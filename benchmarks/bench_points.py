@@ -14,6 +14,9 @@ command reads them, prints median wall-clock and process-CPU times, interleaved 
   its calls, on today's library);
 * the whole computation of the command at 55e6388: ``check_pair_order`` with its own two
   SIFT extractions, then that stage;
+* the command's computation as at a79dafd (main before issue 16 session 8): today's calls with
+  the pair-order check's OpenCV matcher (``BFMatcher.knnMatch``) and the band search's
+  two-key ``lexsort`` put back (``--no-before`` leaves this column out);
 
 and checks that the command gives describe's points (``stereo_points(...,
 **StereoOptions().keywords())``), the points of the stage at 55e6388, and the points saved
@@ -39,12 +42,14 @@ from pathlib import Path
 from typing import Any
 
 import cv2
+import numpy as np
 
 from scenespeak.cli.points import _stereo_points
 from scenespeak.perception import calibration, plausibility, stereo
 from scenespeak.perception.blas import single_threaded_blas
 from scenespeak.perception.features import detect, load_image, to_gray
 from scenespeak.perception.stage_options import StereoOptions
+from scenespeak.perception.stereo import matching
 
 ART = Path(__file__).resolve().parents[1] / "../shared/data/real/stereo/middeval2/Art"
 GOLDEN = Path(__file__).resolve().parent / "points_golden.json"
@@ -95,6 +100,56 @@ def _command_before(left: Any, right: Any, rig: Any) -> Any:
     return _stage_before(left, right, rig)
 
 
+def _ratio_matches_a79dafd(left: Any, right: Any, ratio: float) -> tuple[Any, Any]:
+    """The pair-order check's matcher at a79dafd: OpenCV's brute force, 2 nearest."""
+    knn = cv2.BFMatcher(cv2.NORM_L2).knnMatch(
+        left.astype(np.float32), right.astype(np.float32), k=2
+    )
+    pairs = [
+        (m[0].queryIdx, m[0].trainIdx)
+        for m in knn
+        if len(m) == 2 and m[0].distance < ratio * m[1].distance
+    ]
+    if not pairs:
+        return np.zeros(0, np.intp), np.zeros(0, np.intp)
+    li, ri = np.array(pairs).T
+    return li, ri
+
+
+def _group_best_a79dafd(ii: Any, jj: Any, dd: Any, n: int, rxy: Any) -> tuple[Any, Any, Any]:
+    """``matching._group_best`` at a79dafd (a two-key ``lexsort``)."""
+    best = np.full(n, -1, np.intp)
+    d1 = np.full(n, np.inf, np.float32)
+    d2 = np.full(n, np.inf, np.float32)
+    if len(ii) == 0:
+        return best, d1, d2
+    o = np.lexsort((dd, ii))
+    ii, jj, dd = ii[o], jj[o], dd[o]
+    first = np.flatnonzero(np.r_[True, ii[1:] != ii[:-1]])
+    best[ii[first]] = jj[first]
+    d1[ii[first]] = dd[first]
+    far = np.linalg.norm(rxy[jj] - rxy[best[ii]], axis=1) > matching._SAME_PLACE_PX
+    fi = np.flatnonzero(far)
+    if len(fi):
+        grp = ii[fi]
+        f2 = fi[np.r_[True, grp[1:] != grp[:-1]]]
+        d2[ii[f2]] = dd[f2]
+    return best, d1, d2
+
+
+def _command_a79dafd(left: Any, right: Any, rig: Any) -> Any:
+    """The command's computation with a79dafd's check matcher and band sort (this process
+    only, restored after the call)."""
+    saved = plausibility._ratio_matches, matching._group_best
+    plausibility._ratio_matches = _ratio_matches_a79dafd
+    matching._group_best = _group_best_a79dafd
+    try:
+        names = (Path("left"), Path("right"))
+        return _stereo_points(stereo, left, right, rig, ratio=0.6, sources=names)
+    finally:
+        plausibility._ratio_matches, matching._group_best = saved
+
+
 def _golden(size: tuple[int, int], points: Any, pair: bool) -> str:
     """Whether the points are those saved from 55e6388 (Art only)."""
     if pair or not GOLDEN.exists():
@@ -130,6 +185,7 @@ def pair_arguments(description: str, repeat: int) -> tuple[argparse.Namespace, A
     parser.add_argument(
         "--sizes", nargs="+", type=_size, default=[(640, 480), (1280, 960), (1920, 1080)]
     )
+    parser.add_argument("--no-before", dest="before", action="store_false")
     args = parser.parse_args()
     args.paths = args.pair or (ART / "view1.png", ART / "view5.png")
     left0, right0 = (load_image(p, gray=False) for p in args.paths)
@@ -152,8 +208,12 @@ def main() -> None:
         "| size | SIFT both | SIFT, 2 threads | points now | now / SIFT | stage at 55e6388 "
         "| stage 55e6388 / SIFT | command at 55e6388 | command 55e6388 / SIFT "
         "| now = describe's stage | now = stage at 55e6388 | now = saved (55e6388) |"
+        + (" command as at a79dafd | a79dafd / SIFT | now = a79dafd |" if args.before else "")
     )
-    print("| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | --- | --- | --- |")
+    print(
+        "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | --- | --- | --- |"
+        + (" ---: | ---: | --- |" if args.before else "")
+    )
     names = (Path("left"), Path("right"))
     for size in args.sizes:
         left, right = resized_pair(left0, right0, size)
@@ -176,7 +236,12 @@ def main() -> None:
         def command(left: Any = left, right: Any = right, rig: Any = rig) -> Any:
             return _command_before(left, right, rig)
 
+        def before(left: Any = left, right: Any = right, rig: Any = rig) -> Any:
+            return _command_a79dafd(left, right, rig)
+
         cases = {"sift": sift, "sift2": sift2, "now": now, "stage": stage, "command": command}
+        if args.before:
+            cases["a79dafd"] = before
         times: dict[str, list[tuple[float, float]]] = {k: [] for k in cases}
         for _ in range(args.repeat):  # interleaved: they share the machine's load
             for k, fn in cases.items():
@@ -194,7 +259,12 @@ def main() -> None:
             f"{_ratio(med, 'now')} | {cell['stage']} | {_ratio(med, 'stage')} | "
             f"{cell['command']} | {_ratio(med, 'command')} | "
             f"{_same(got, describe)} ({len(got.xyz)} points) | {_same(got, old)} | "
-            f"{_golden(size, got, args.pair is not None)} |",
+            f"{_golden(size, got, args.pair is not None)} |"
+            + (
+                f" {cell['a79dafd']} | {_ratio(med, 'a79dafd')} | {_same(got, before())} |"
+                if args.before
+                else ""
+            ),
             flush=True,
         )
     print(f"\nload average after: {' '.join(f'{x:.2f}' for x in os.getloadavg())}")

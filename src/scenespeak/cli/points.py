@@ -115,8 +115,9 @@ def _stereo_points(
     the second thread beside it as in session 6: OpenCV runs a ``parallel_for_`` that starts
     while another one is under way serially, so the dense map's SGBM, which started while the
     check's matcher ran, took one core instead of two (``benchmarks/points_timeline.py``,
-    issue 16 session 7). The points are those of the command before
-    (``benchmarks/points_golden.py``).
+    issue 16 session 7). Since session 8 the check's matcher is NumPy's, OpenCV's brute-force
+    pairs bit for bit at about a quarter of the CPU (``plausibility._ratio_matches``). The
+    points are those of the command before (``benchmarks/points_golden.py``).
     """
     from concurrent.futures import ThreadPoolExecutor
 

@@ -353,7 +353,9 @@ def check_pair_order(
     The check looks at the :data:`CHECK_FEATURES` strongest SIFT features of each image. With
     ``features`` (the images' features, already detected, e.g. by the stereo stage) it takes
     the strongest of those instead of running SIFT twice more: ``scenespeak points`` does, and
-    saves about half of its time (issue 16).
+    saves about half of its time (issue 16). The matches are OpenCV's brute-force 2-nearest
+    ratio-test pairs, computed in NumPy bit for bit (:func:`_ratio_matches`, issue 16
+    session 8: 18 -> 5 ms CPU for 1,300 features a side).
 
     Returns
     -------
