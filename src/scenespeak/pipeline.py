@@ -61,6 +61,7 @@ from scenespeak.perception.blas import single_threaded_blas
 from scenespeak.perception.features import Features, detect, to_gray
 from scenespeak.perception.known_evidence import KeypointEvidence
 from scenespeak.perception.objects import ObjectOptions, SceneObject
+from scenespeak.perception.recognition.closer import closer_look
 from scenespeak.perception.recognition.colour import ColourModel, name_unknown_objects
 from scenespeak.perception.recognition.options import LabelOptions
 from scenespeak.perception.recognition.results import Labelling
@@ -323,8 +324,15 @@ def describe_scene(
             _fill(plain, plain_for, left, left.shape[:2])
         id_to_label = {o.id: o.label for o in db.list_objects()} if opts.strategy.geometry else {}
         colours = db.colour_models() if opts.labels.colour and hasattr(db, "colour_models") else {}
+        closer = opts.labels.closer and bool(id_to_label) and hasattr(db, "labeller")
+        look = db.labeller(opts.labels) if closer else None  # loaded here: no SQLite there
         early = partial(
-            _EarlyStages, (left, right), feats_l, id_to_label=id_to_label, colours=colours
+            _EarlyStages,
+            (left, right),
+            feats_l,
+            id_to_label=id_to_label,
+            colours=colours,
+            look=look,
         )
 
         def rest(
@@ -346,6 +354,7 @@ class _EarlyStages:
     labelling: Labelling
     id_to_label: Mapping[int, str]
     colours: Mapping[str, ColourModel] = field(default_factory=dict)
+    look: Callable[[Features], Labelling] | None = None
 
 
 def _no_matches_error(src: Mapping[str, str], rig: Any, n_left: int, n_right: int) -> Exception:
@@ -399,17 +408,19 @@ def _after_stereo(
             early.stereo.geometry,
             share,
         )
-        if early.colours and not result.rect.needs_resampling:
-            # unknown objects that colour and shape name (recognition.colour); the points
-            # project into the left image as given only when it was not resampled
+        if (early.colours or early.look) and not result.rect.needs_resampling:
+            # unknown objects named by a closer look at their region (recognition.closer), then
+            # by colour and shape (recognition.colour); the points project into the left image
+            # as given only when it was not resampled
+            left, matched = early.images[0], early.labelling.matched
+            veto = KeypointEvidence.veto(
+                rig.K_left, left.shape, early.features_left.xy, matched, early.id_to_label
+            )
+            if early.look is not None:
+                objects = closer_look(objects, left, rig.K_left, early.look, veto=veto)
             trim = (np.asarray(rig.up, np.float64), replace(opts.objects, radius=None))
             objects = name_unknown_objects(
-                objects,
-                early.images[0],
-                rig.K_left,
-                early.colours,
-                remake=trim,
-                veto=_keypoint_veto(early, rig),
+                objects, left, rig.K_left, early.colours, remake=trim, veto=veto
             )
 
     say("relations")
@@ -523,24 +534,6 @@ def dataset_labels(dataset: str | PathLike[str]) -> list[str]:
         If the dataset has no ``objects`` folder.
     """
     return [p.name for p in _object_folders(dataset)]
-
-
-def _keypoint_veto(
-    early: _EarlyStages, rig: Any
-) -> Callable[[SceneObject, str], str | None] | None:
-    """The keypoints' veto on names given without a geometric check (None without the
-    database's ids: geometry first only)."""
-    if not early.id_to_label or early.labelling is None:
-        return None
-    h, w = early.images[0].shape[:2]
-    evidence = KeypointEvidence.from_matches(
-        np.asarray(rig.K_left, np.float64),
-        (h, w),
-        np.asarray(early.features_left.xy, np.float64),
-        early.labelling.matched,
-        early.id_to_label,
-    )
-    return evidence.refuses
 
 
 def database_from_dataset(

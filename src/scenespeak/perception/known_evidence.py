@@ -24,7 +24,7 @@ vote), and on the held-out dev set the check cost a right grey "jar" at 0.75 m (
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 
 import cv2
@@ -144,6 +144,24 @@ class KeypointEvidence:
         """From the labelling's ``matched`` object ids (-1: none) and the database's ids."""
         votes = [id_to_label.get(int(i)) if i >= 0 else None for i in np.asarray(matched)]
         return cls(camera, shape, keypoints_xy, votes, options or EvidenceOptions())
+
+    @classmethod
+    def veto(
+        cls,
+        camera: NDArray[np.float64],
+        shape: tuple[int, ...],
+        keypoints_xy: NDArray[np.float64],
+        matched: NDArray[np.integer],
+        id_to_label: Mapping[int, str],
+    ) -> Callable[[SceneObject, str], str | None] | None:
+        """:meth:`refuses` of :meth:`from_matches` (``shape``'s first two entries: the
+        image's rows and columns); None without the database's ids (nothing to say)."""
+        if not id_to_label:
+            return None
+        xy = np.asarray(keypoints_xy, np.float64)
+        rows_cols = (int(shape[0]), int(shape[1]))
+        cam = np.asarray(camera, np.float64)
+        return cls.from_matches(cam, rows_cols, xy, matched, id_to_label).refuses
 
     def refuses(self, obj: SceneObject, label: str) -> str | None:
         """Why ``obj`` cannot be ``label`` by the keypoints (None: they do not say)."""

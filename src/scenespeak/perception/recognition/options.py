@@ -76,6 +76,10 @@ class LabelOptions:
     colour : bool
         True — the pipeline names unknown objects whose colours and proportions fit one
         learnt object only (:mod:`~scenespeak.perception.recognition.colour`; False: off).
+    closer : bool
+        True — the pipeline looks again, enlarged, at each unknown object's own image region
+        and names it after what that verifies (:mod:`~scenespeak.perception.recognition.closer`;
+        False: off).
     """
 
     ratio: float = 0.8
@@ -99,6 +103,7 @@ class LabelOptions:
     finer_max_boxes: int = 6
     finer_budget: float = 0.15
     colour: bool = True
+    closer: bool = True
 
     @classmethod
     def with_overrides(

@@ -188,3 +188,14 @@ def save_quantiser(conn: sqlite3.Connection, gen: int, index: IVFIndex | FaissIn
             raise
     except sqlite3.Error:
         pass
+
+
+def _check_magic(p: Path) -> None:
+    """Refuse a file that cannot be read or does not begin as an SQLite file does."""
+    try:
+        with p.open("rb") as fh:
+            head = fh.read(len(_SQLITE_MAGIC))
+    except OSError as exc:
+        raise DatabaseError(p, f"cannot be read: {exc.strerror or exc}") from None
+    if head != _SQLITE_MAGIC:
+        raise DatabaseError(p, "is not a scenespeak object database (not an SQLite file)")

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import contextlib
+import functools
 import sqlite3
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import Executor
@@ -32,10 +33,10 @@ from scenespeak.perception.recognition.loading import (
 from scenespeak.perception.recognition.results import Labelling, ObjectInfo, TrainingView
 from scenespeak.perception.recognition.schema import (
     _SCHEMA,
-    _SQLITE_MAGIC,
     APPLICATION,
     APPLICATION_ID,
     SCHEMA_VERSION,
+    _check_magic,
     _check_schema,
     _duplicate,
     _now,
@@ -558,15 +559,13 @@ class ObjectDatabase:
 
         return finer_search(self._loaded, image, features, labelling, opts, executor)
 
-
-def _check_magic(p: Path) -> None:
-    try:
-        with p.open("rb") as fh:
-            head = fh.read(len(_SQLITE_MAGIC))
-    except OSError as exc:
-        raise DatabaseError(p, f"cannot be read: {exc.strerror or exc}") from None
-    if head != _SQLITE_MAGIC:
-        raise DatabaseError(p, "is not a scenespeak object database (not an SQLite file)")
+    def labeller(self, options: LabelOptions | None = None) -> Callable[[Features], Labelling]:
+        """``label(features, options)`` as a function of the features alone, loaded now: it
+        reads no SQLite, so another thread may call it (the closer look, ``recognition.closer``)."""
+        opts = options if options is not None else LabelOptions()
+        self.load(nprobe=opts.nprobe)
+        assert self._loaded is not None
+        return functools.partial(label_features, self._loaded, o=opts)
 
 
 def _insert_view(conn: sqlite3.Connection, oid: int, v: _ViewData) -> None:

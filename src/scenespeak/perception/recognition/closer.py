@@ -1,0 +1,260 @@
+"""A closer look at the unknown objects: each one's own image region, enlarged, searched again.
+
+Geometry first finds what stands on the support whether or not the labelling named it; what it
+could not name becomes an *unknown object*. At 1.5–2 m, or where a label wraps round a cylinder,
+the first look gave the object too few keypoints to verify (5–20 on the tuning sets' misses),
+and the finer search (:mod:`~scenespeak.perception.recognition.finer`) looks only round keypoints
+that already voted for something. This looks where geometry says an object *is*: the box round
+each unknown object's points projected into the left image is cut out, enlarged ``upscale``
+times and searched with a lower contrast threshold (SIFT's answer to small scale, Lowe 2004,
+sec. 3.3). Only the keypoints inside the object's own region (the convex hull of its projected
+points grown by ``grow`` pixels, minus the regions of the objects already named: a neighbour in
+the box is not this object) are labelled, with the ratio test and geometric checks of the whole
+image (:func:`~scenespeak.perception.recognition.label.label_features`: the same
+``LabelOptions``, the small-object rule in scene pixels).
+
+The unknown object takes the label of the best verified detection (most inliers) when
+
+- the detection's outline carried into the scene is about the object's size: its area within
+  ``area_factor`` of the region's either way (on the tuning sets' right namings 0.7–1.7; a
+  training view's outline many times the region is a piece of a larger object, one far smaller a
+  chance fit on a part of another object);
+- the first look's keypoints do not contradict it (``veto``, e.g.
+  :meth:`~scenespeak.perception.known_evidence.KeypointEvidence.refuses`: a region SIFT sees
+  well, of which almost no keypoint voted for the label, is another object's texture);
+- no object of that label stands within :data:`~scenespeak.perception.recognition.colour.
+  PIECE_GAP` of it (then it is a piece of that object, not a second instance).
+
+Its points stay the segment's (geometry placed it); its confidence is that of a detection with
+as many inliers at distinct positions, and a note says how it was named.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+from numpy.typing import NDArray
+
+from scenespeak.geometry.polygons import polygon_area
+from scenespeak.perception.features import Features, detect, to_gray
+from scenespeak.perception.objects import SceneObject
+from scenespeak.perception.recognition.colour import _piece_of, _renumbered
+from scenespeak.perception.recognition.label import inside_polygon
+from scenespeak.perception.recognition.results import Detection, Labelling
+from scenespeak.perception.scene_regions import detection_confidence
+
+__all__ = ["CloserOptions", "closer_look", "object_region"]
+
+
+@dataclass(frozen=True)
+class CloserOptions:
+    """Knobs of :func:`closer_look` (module docstring; set on the tuning sets).
+
+    Attributes
+    ----------
+    upscale : float
+        2 — the box is enlarged this many times before SIFT.
+    contrast : float
+        0.01 — SIFT's contrast threshold in the enlarged box (a quarter of OpenCV's default).
+    pad : float
+        16 px — the box round the object's projected points is grown by this much (scene
+        pixels) on each side, so that keypoints near the region's edge have their context.
+    grow : int
+        4 px — the object's region (its projected points' convex hull) is grown this much.
+    area_factor : float
+        2.5 — the detection's carried outline has an area within this factor of the region's.
+    budget : float
+        0.5 — the boxes looked at cover at most this share of the image (before enlarging),
+        the smallest first (the far objects the first look saw worst).
+    """
+
+    upscale: float = 2.0
+    contrast: float = 0.01
+    pad: float = 16.0
+    grow: int = 4
+    area_factor: float = 2.5
+    budget: float = 0.5
+
+
+def object_region(
+    obj: SceneObject, camera: NDArray[np.float64], shape: tuple[int, int]
+) -> NDArray[np.float64] | None:
+    """The convex hull (column, row) of ``obj``'s points projected by the 3 × 3 ``camera``,
+    clipped to the image of ``shape`` (rows, columns); None for fewer than 3 points in front.
+
+    >>> from scenespeak.perception.objects import make_object
+    >>> sq = [[x, y, 1.0] for x in (-0.1, 0.0, 0.1) for y in (-0.1, 0.0, 0.1)]
+    >>> obj = make_object("box", sq, np.array([0.0, -1.0, 0.0]), outliers="none")
+    >>> K = np.array([[500.0, 0, 320], [0, 500, 240], [0, 0, 1]])
+    >>> object_region(obj, K, (480, 640)).min(axis=0).tolist()
+    [270.0, 190.0]
+    """
+    xyz = np.asarray(obj.xyz, np.float64).reshape(-1, 3)
+    xyz = xyz[xyz[:, 2] > 1e-6]
+    if len(xyz) < 3:
+        return None
+    uvw = xyz @ np.asarray(camera, np.float64).T
+    uv = uvw[:, :2] / uvw[:, 2:3]
+    h, w = shape
+    uv = np.clip(uv, [0.0, 0.0], [w - 1.0, h - 1.0])
+    hull = cv2.convexHull(uv.astype(np.float32)).reshape(-1, 2).astype(np.float64)
+    return hull if len(hull) >= 3 and abs(polygon_area(hull)) > 0 else None
+
+
+def _enlarged_features(
+    gray: NDArray[np.uint8], box: tuple[int, int, int, int], o: CloserOptions
+) -> Features:
+    """SIFT of ``gray[y0:y1, x0:x1]`` enlarged ``o.upscale`` times, positions and sizes in
+    scene pixels (pixel centres: enlarged pixel i covers crop pixels [i / s, (i + 1) / s))."""
+    x0, y0, x1, y1 = box
+    crop = gray[y0:y1, x0:x1]
+    if crop.size == 0:
+        return Features.empty()
+    s = float(o.upscale)
+    big = cv2.resize(crop, None, fx=s, fy=s, interpolation=cv2.INTER_LINEAR)
+    f = detect(big, contrast_threshold=o.contrast, precise_upscale=False)
+    xy = (f.xy + 0.5) / s - 0.5 + np.array([x0, y0], np.float64)
+    return dataclasses.replace(f, xy=xy, size=(f.size / s).astype(np.float32))
+
+
+def _region_mask(hull: NDArray[np.float64], shape: tuple[int, int], grow: int) -> NDArray[np.bool_]:
+    """The pixels of ``hull`` grown by ``grow`` pixels."""
+    m = np.zeros(shape, np.uint8)
+    cv2.fillPoly(m, [np.rint(hull).astype(np.int32).reshape(-1, 1, 2)], 1)
+    if grow <= 0:
+        return m > 0
+    return np.asarray(cv2.dilate(m, np.ones((2 * grow + 1, 2 * grow + 1), np.uint8)) > 0)
+
+
+@dataclass(frozen=True, eq=False)
+class _Look:
+    """What :func:`closer_look` needs of the scene: the gray image, the camera, the regions of
+    the objects already named, the labeller and the options."""
+
+    gray: NDArray[np.uint8]
+    camera: NDArray[np.float64]
+    named: tuple[NDArray[np.float64], ...]
+    look: Callable[[Features], Labelling]
+    options: CloserOptions
+
+    def keypoints(self, hull: NDArray[np.float64]) -> Features:
+        """The enlarged box's keypoints inside the (grown) region and no named object's."""
+        h, w = self.gray.shape
+        o = self.options
+        lo = np.maximum(np.floor(hull.min(axis=0) - o.pad), 0).astype(int)
+        hi = np.minimum(np.ceil(hull.max(axis=0) + o.pad) + 1, [w, h]).astype(int)
+        f = _enlarged_features(self.gray, (int(lo[0]), int(lo[1]), int(hi[0]), int(hi[1])), o)
+        if not len(f):
+            return f
+        mask = _region_mask(hull, (h, w), o.grow)
+        c = np.clip(np.rint(f.xy[:, 0]).astype(np.intp), 0, w - 1)
+        r = np.clip(np.rint(f.xy[:, 1]).astype(np.intp), 0, h - 1)
+        keep = mask[r, c]
+        for other in self.named:
+            keep &= ~inside_polygon(f.xy, other)
+        return f.subset(keep)
+
+    def best(self, hull: NDArray[np.float64]) -> tuple[Detection, Features] | None:
+        """The detection with most inliers among those of the object's size, or None."""
+        f = self.keypoints(hull)
+        if not len(f):
+            return None
+        area = abs(polygon_area(hull))
+        k = self.options.area_factor
+        for det in self.look(f).detections:  # most inliers first
+            carried = abs(polygon_area(det.outline_in_scene))
+            if area / k <= carried <= area * k:
+                return det, f
+        return None
+
+
+def _budgeted(hulls: dict[int, NDArray[np.float64]], limit: float) -> list[int]:
+    """The objects whose boxes fit the budget of ``limit`` pixels, smallest box first."""
+    area = {i: float(np.prod(np.ptp(h, axis=0) + 1.0)) for i, h in hulls.items()}
+    out, spent = [], 0.0
+    for i in sorted(area, key=lambda j: (area[j], j)):
+        spent += area[i]
+        if spent > limit:
+            break
+        out.append(i)
+    return sorted(out)
+
+
+def closer_look(
+    objects: Sequence[SceneObject],
+    image: NDArray[np.generic],
+    camera: NDArray[np.float64],
+    look: Callable[[Features], Labelling],
+    options: CloserOptions | None = None,
+    veto: Callable[[SceneObject, str], str | None] | None = None,
+) -> tuple[SceneObject, ...]:
+    """``objects`` with the unknown ones that a closer look at their own region names renamed
+    (module docstring), instances numbered ("cup", "cup 2") and the unknown ones renumbered.
+
+    Parameters
+    ----------
+    objects : sequence of SceneObject
+        The scene's objects; those labelled ``"unknown object N"`` are looked at.
+    image : ndarray
+        The left image the objects' points project into (gray or colour).
+    camera : (3, 3)
+        The left camera matrix of the objects' frame.
+    look : callable
+        Labels features against the database, ``look(features) -> Labelling``
+        (:meth:`~scenespeak.perception.recognition.ObjectDatabase.labeller`).
+    options : CloserOptions, optional
+    veto : callable, optional
+        ``veto(obj, label)``: why ``obj`` cannot be ``label`` (None: it may be); a vetoed
+        object stays unknown with a note saying why.
+    """
+    o = options or CloserOptions()
+    gray = to_gray(np.asarray(image))
+    cam = np.asarray(camera, np.float64)
+    shape = (int(gray.shape[0]), int(gray.shape[1]))
+    hulls = {
+        i: hull
+        for i, obj in enumerate(objects)
+        if obj.label.startswith("unknown object")
+        and (hull := object_region(obj, cam, shape)) is not None
+    }
+    if not hulls:
+        return tuple(objects)
+    named = tuple(
+        hull
+        for obj in objects
+        if not obj.label.startswith("unknown object")
+        and (hull := object_region(obj, cam, shape)) is not None
+    )
+    scene = _Look(gray, cam, named, look, o)
+    out = list(objects)
+    changed = False
+    for i in _budgeted(hulls, o.budget * shape[0] * shape[1]):
+        found = scene.best(hulls[i])
+        if found is None:
+            continue
+        det, feats = found
+        obj = out[i]
+        if _piece_of(obj, det.label, out):
+            continue
+        why = veto(obj, det.label) if veto is not None else None
+        if why is not None:
+            out[i] = dataclasses.replace(obj, notes=(*obj.notes, f"not named {det.label}: {why}"))
+            continue
+        distinct = int(np.unique(np.rint(feats.xy[det.inliers]), axis=0).shape[0])
+        note = (
+            f"named by a closer look ({o.upscale:g}x enlarged region): {int(det.score)} "
+            f"inliers ({det.model}) of {det.matches} matches"
+        )
+        out[i] = dataclasses.replace(
+            obj,
+            label=det.label,
+            name=det.label,
+            confidence=detection_confidence(int(det.score), distinct),
+            notes=(*obj.notes, note),
+        )
+        changed = True
+    return tuple(_renumbered(out)) if changed else tuple(out)
