@@ -11,6 +11,7 @@ Two kinds of scenes:
 
 from __future__ import annotations
 
+import dataclasses
 import json
 from pathlib import Path
 from typing import Any
@@ -128,9 +129,16 @@ def test_a_small_far_card_is_recognised_by_the_small_object_rule(card_db: Path) 
     # the finer search (an enlarged look round its lone matches) verifies it with 8 inliers
     finer = _describe(cards, card_db, min_inliers_small=8)
     assert finer.object("astronaut") is not None
-    strict = _describe(cards, card_db, labels=LabelOptions(min_inliers_small=8, finer_upscale=1.0))
+    no_finer = LabelOptions(min_inliers_small=8, finer_upscale=1.0, closer=False)
+    strict = _describe(cards, card_db, labels=no_finer)
     assert strict.object("astronaut") is None
     assert any(o.label.startswith("unknown object") for o in strict.objects)  # clustered
+    # the closer look at that unknown object's own region (recognition/closer.py) names it
+    closer = _describe(cards, card_db, labels=dataclasses.replace(no_finer, closer=True))
+    named = closer.object("astronaut")
+    assert named is not None and named.notes[-1].startswith("named by a closer look")
+    assert named.plane_centroid == pytest.approx([-0.3, 1.9], abs=0.03)
+    assert not any(o.label.startswith("unknown object") for o in closer.objects)
 
 
 def test_textureless_pair_is_an_image_error(card_db: Path) -> None:
