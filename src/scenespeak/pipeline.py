@@ -50,7 +50,7 @@ from dataclasses import dataclass, field, replace
 from functools import partial
 from os import PathLike
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 from numpy.typing import NDArray
@@ -324,15 +324,13 @@ def describe_scene(
             _fill(plain, plain_for, left, left.shape[:2])
         id_to_label = {o.id: o.label for o in db.list_objects()} if opts.strategy.geometry else {}
         colours = db.colour_models() if opts.labels.colour and hasattr(db, "colour_models") else {}
-        closer = opts.labels.closer and bool(id_to_label) and hasattr(db, "labeller")
-        look = db.labeller(opts.labels) if closer else None  # loaded here: no SQLite there
         early = partial(
             _EarlyStages,
             (left, right),
             feats_l,
             id_to_label=id_to_label,
             colours=colours,
-            look=look,
+            look=_closer_labeller(db, opts.labels, bool(id_to_label)),
         )
 
         def rest(
@@ -342,6 +340,16 @@ def describe_scene(
             return _after_stereo(stage, opts, src, times, tell, share)
 
         return label_and_finish(db, (feats_l, left), opts, pool, rest, future_st, timings, say)
+
+
+def _closer_labeller(
+    db: Any, labels: LabelOptions, geometry: bool
+) -> Callable[[Features], Labelling] | None:
+    """The closer look's labeller (``recognition.closer``; None when off), loaded here: it
+    reads no SQLite in the thread that runs it."""
+    if not (labels.closer and geometry and hasattr(db, "labeller")):
+        return None
+    return cast(Callable[[Features], Labelling], db.labeller(labels))
 
 
 @dataclass(frozen=True, eq=False)
