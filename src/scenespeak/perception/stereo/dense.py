@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import math
+import os
+import sys
 
 import cv2
 import numpy as np
@@ -11,6 +13,7 @@ from numpy.typing import ArrayLike, NDArray
 from scenespeak.errors import ImageError
 from scenespeak.perception.calibration import Rectification
 from scenespeak.perception.features import to_gray
+from scenespeak.perception.stereo import sgbm
 from scenespeak.perception.stereo.options import DenseOptions
 from scenespeak.perception.stereo.results import DenseDisparity
 
@@ -20,7 +23,11 @@ __all__ = [
     "SGBM_P2_PER_PIXEL",
     "SGBM_SPECKLE_RANGE",
     "SGBM_SPECKLE_WINDOW",
+    "COMPILED_MIN_CELLS",
+    "SGBM_ENV",
     "dense_disparity",
+    "sgbm_map",
+    "use_compiled",
 ]
 
 
@@ -63,6 +70,12 @@ SGBM_DISP12_MAX_DIFF = 1
 #: "1 or 2".
 SGBM_SPECKLE_WINDOW = 100
 SGBM_SPECKLE_RANGE = 2
+#: ``auto`` | ``opencv`` | ``numba``: which SGBM :func:`sgbm_map` runs (:func:`use_compiled`).
+SGBM_ENV = "SCENESPEAK_SGBM"
+#: Smallest cost volume (matched columns × disparities × rows) for which ``auto`` runs the
+#: compiled SGBM: measured faster at 1280×960 and 1920×1080 (Art: about 2·10⁸ and 6.5·10⁸
+#: cells), slower at 640×480 (3·10⁷; ``benchmarks/bench_sgbm.py``).
+COMPILED_MIN_CELLS = 150_000_000
 
 
 def dense_disparity(
@@ -139,22 +152,73 @@ def dense_disparity(
     if border:
         cl = np.asarray(cv2.copyMakeBorder(cl, 0, 0, border, 0, cv2.BORDER_CONSTANT, value=0))
         cr = np.asarray(cv2.copyMakeBorder(cr, 0, 0, border, 0, cv2.BORDER_CONSTANT, value=0))
-    bs = int(block_size) | 1
-    sgbm = cv2.StereoSGBM_create(  # type: ignore[attr-defined]
+    raw = sgbm_map(cl, cr, mn, num, int(block_size) | 1, o.uniqueness)
+    _to_pixels(raw[y0 - ya : y1 - ya, border + x0 - xa : border + x1 - xa], mn, out[y0:y1, x0:x1])
+    return DenseDisparity(out, rect, mn, num, box)
+
+
+def sgbm_map(
+    cl: NDArray[np.uint8], cr: NDArray[np.uint8], mn: int, num: int, bs: int, uniqueness: int
+) -> NDArray[np.int16]:
+    """OpenCV's 3-way StereoSGBM map of a gray pair with the stage's parameters (the
+    module's constants), from OpenCV or from the compiled copy of it, which gives the same
+    int16 map bit for bit (:mod:`~scenespeak.perception.stereo.sgbm`); :func:`use_compiled`
+    chooses."""
+    p1, p2 = SGBM_P1_PER_PIXEL * bs * bs, SGBM_P2_PER_PIXEL * bs * bs
+    if use_compiled(cl.shape, mn, num, bs, uniqueness):
+        return sgbm.sgbm3way(
+            cl,
+            cr,
+            min_disparity=mn,
+            num_disparities=num,
+            block_size=bs,
+            p1=p1,
+            p2=p2,
+            uniqueness=uniqueness,
+            disp12_max_diff=SGBM_DISP12_MAX_DIFF,
+            speckle_window=SGBM_SPECKLE_WINDOW,
+            speckle_range=SGBM_SPECKLE_RANGE,
+            threads=max(1, cv2.getNumThreads()),
+        )
+    matcher = cv2.StereoSGBM_create(  # type: ignore[attr-defined]
         minDisparity=mn,
         numDisparities=num,
         blockSize=bs,
-        P1=SGBM_P1_PER_PIXEL * bs * bs,
-        P2=SGBM_P2_PER_PIXEL * bs * bs,
+        P1=p1,
+        P2=p2,
         disp12MaxDiff=SGBM_DISP12_MAX_DIFF,
-        uniquenessRatio=o.uniqueness,
+        uniquenessRatio=uniqueness,
         speckleWindowSize=SGBM_SPECKLE_WINDOW,
         speckleRange=SGBM_SPECKLE_RANGE,
         mode=cv2.STEREO_SGBM_MODE_SGBM_3WAY,
     )
-    raw = sgbm.compute(cl, cr)
-    _to_pixels(raw[y0 - ya : y1 - ya, border + x0 - xa : border + x1 - xa], mn, out[y0:y1, x0:x1])
-    return DenseDisparity(out, rect, mn, num, box)
+    return np.asarray(matcher.compute(cl, cr))
+
+
+def use_compiled(shape: tuple[int, ...], mn: int, num: int, bs: int, uniqueness: int) -> bool:
+    """Whether :func:`sgbm_map` runs the compiled SGBM rather than OpenCV's.
+
+    ``SCENESPEAK_SGBM`` (read at every call): ``opencv`` never; ``numba`` whenever the
+    compiled copy can compute the call (:func:`~scenespeak.perception.stereo.sgbm.supported`,
+    Numba installed); ``auto`` (default) only where it was measured to win: the call's cost
+    volume holds at least :data:`COMPILED_MIN_CELLS` cells **and** Numba is already loaded in
+    this process. Loading Numba costs a process about 0.6 s of CPU (import 0.2 s, the first
+    compiled call 0.4 s; docs/stereo.md), more than the compiled SGBM saves on one 1920×1080
+    pair, so ``auto`` never loads it for SGBM alone. The map is the same either way, so the
+    choice changes only the time. ``SCENESPEAK_NO_NUMBA=1`` means ``opencv``.
+    """
+    value = os.environ.get(SGBM_ENV, "auto").strip().lower()
+    if value not in ("auto", "opencv", "numba"):
+        raise ValueError(f"{SGBM_ENV}={value!r}: expected auto, opencv or numba")
+    if value == "opencv" or os.environ.get("SCENESPEAK_NO_NUMBA", "") not in ("", "0"):
+        return False
+    p2 = SGBM_P2_PER_PIXEL * bs * bs
+    if not (sgbm.available() and sgbm.supported((shape[0], shape[1]), num, bs, p2, uniqueness)):
+        return False
+    if value == "numba":
+        return True
+    cells = max(0, shape[1] - max(mn + num, 0) + min(mn, 0)) * num * shape[0]
+    return cells >= COMPILED_MIN_CELLS and "numba" in sys.modules
 
 
 def _to_pixels(raw: NDArray[np.int16], mn: int, out: NDArray[np.float32]) -> None:
