@@ -129,7 +129,9 @@ def main() -> None:
             mode=cv2.STEREO_SGBM_MODE_SGBM_3WAY,
         )
 
-        def compiled(cl: Any = cl, cr: Any = cr, mn: int = mn, num: int = num) -> Any:
+        def compiled(
+            cl: Any = cl, cr: Any = cr, mn: int = mn, num: int = num, p1: int = p1, p2: int = p2
+        ) -> Any:
             return stereo.sgbm.sgbm3way(
                 cl, cr, min_disparity=mn, num_disparities=num, block_size=bs, p1=p1, p2=p2,
                 uniqueness=10, disp12_max_diff=stereo.SGBM_DISP12_MAX_DIFF,

@@ -49,7 +49,7 @@ def channels(img: np.ndarray, out: np.ndarray, mirror: bool) -> None:  # pragma:
                 + np.int32(img[ys, x + 1])
                 - np.int32(img[ys, x - 1])
             )
-            g[x] = min(max(s, -15), 15) + 15
+            g[x] = max(-15, min(int(s), 15)) + 15
             v[x] = img[y, x]
         for c in range(2):
             val = out[y, c, 0]
@@ -104,7 +104,20 @@ def _pixel_costs(
 
 
 @njit(cache=True, nogil=True)
-def _row(
+def _box_start(p: np.ndarray, half: int, out: np.ndarray) -> None:  # pragma: no cover - compiled
+    """The horizontal box sum at column 0 of one row of pixel costs ``p``: column 0 counted
+    ``half + 1`` times (OpenCV replicates it), then columns 1 .. half."""
+    w1, nd = p.shape
+    for d in range(nd):
+        out[d] = np.int16(np.int16(p[0, d]) * np.int16(half + 1))
+    for j in range(1, half + 1):
+        jj = min(j, w1 - 1)
+        for d in range(nd):
+            out[d] = np.int16(out[d] + p[jj, d])
+
+
+@njit(cache=True, nogil=True)
+def _row(  # noqa: C901 (each column's steps in one loop on purpose: its rows stay in L1)
     ch1: np.ndarray,
     ch2r: np.ndarray,
     k: int,
@@ -153,19 +166,9 @@ def _row(
     if fresh:
         for j in range(min(half + 1, w1)):
             _pixel_costs(r1, r2, min_x1 + j, w - 1 - min_x1 - j + min_d, padd, j)
-    for d in range(nd):
-        hadd[d] = np.int16(np.int16(padd[0, d]) * np.int16(half + 1))
-    for j in range(1, half + 1):
-        jj = min(j, w1 - 1)
-        for d in range(nd):
-            hadd[d] = np.int16(hadd[d] + padd[jj, d])
+    _box_start(padd, half, hadd)
     if not first:
-        for d in range(nd):
-            hsub[d] = np.int16(np.int16(psub[0, d]) * np.int16(half + 1))
-        for j in range(1, half + 1):
-            jj = min(j, w1 - 1)
-            for d in range(nd):
-                hsub[d] = np.int16(hsub[d] + psub[jj, d])
+        _box_start(psub, half, hsub)
     q1 = np.int16(p1)
     left[0, 1 : nd + 1] = 0
     lmin = np.int16(0)
@@ -279,7 +282,7 @@ def _backward(
         key = np.int32(2147483647)
         for d in range(nd):
             key = min(key, np.int32(np.int32(s[d]) * np.int32(65536) + idx[d]))
-        best = key & 0xFFFF
+        best = int(key & 0xFFFF)
         if uniqueness > 0:
             # ties apart by more than 1 fail the test whichever of them is "best"
             thresh = np.int16((100 * np.int32(min_cost)) // (100 - uniqueness) + 1)
@@ -292,15 +295,15 @@ def _backward(
             if other < thresh:
                 continue
         else:
-            best = _lane_best(s, min_cost, lanes)
+            best = _lane_best(s, int(min_cost), lanes)
         x2 = x + min_x1 - best - min_d
         if 0 <= x2 < w and disp2cost[x2] > min_cost:
             disp2cost[x2] = min_cost
             disp2[x2] = best + min_d
         if 0 < best < nd - 1:
-            sm = np.int32(s[best - 1])
-            sp = np.int32(s[best + 1])
-            denom2 = max(sm + sp - 2 * np.int32(s[best]), 1)
+            sm = int(s[best - 1])
+            sp = int(s[best + 1])
+            denom2 = max(sm + sp - 2 * int(s[best]), 1)
             num = (sm - sp) * 16 + denom2
             q = abs(num) // (2 * denom2)
             dd = best * 16 + (q if num >= 0 else -q)
@@ -335,7 +338,6 @@ def stripe(
     max_d = min_d + nd
     min_x1 = max(max_d, 0)
     max_x1 = w + min(min_d, 0)
-    w1 = max_x1 - min_x1
     invalid = (min_d - 1) * 16
     out[:, :] = invalid
     y0 = max(min(n * stripe_sz - overlap, h), 0)
@@ -374,7 +376,9 @@ def stripe(
         row = out[dst0 + y - y0]
         disp2[:] = invalid
         disp2cost[:] = _MAX
-        _backward(cvol, right, lt, s, row, disp2, disp2cost, min_x1, min_d, p1, p2, uniqueness, lanes)
+        _backward(
+            cvol, right, lt, s, row, disp2, disp2cost, min_x1, min_d, p1, p2, uniqueness, lanes
+        )
         # --- the pseudo left-right check on this row's reverse map
         for x in range(min_x1, max_x1):
             d1 = np.int32(row[x])

@@ -18,13 +18,13 @@ from scenespeak.perception.stereo.options import DenseOptions
 from scenespeak.perception.stereo.results import DenseDisparity
 
 __all__ = [
+    "COMPILED_MIN_CELLS",
     "SGBM_DISP12_MAX_DIFF",
+    "SGBM_ENV",
     "SGBM_P1_PER_PIXEL",
     "SGBM_P2_PER_PIXEL",
     "SGBM_SPECKLE_RANGE",
     "SGBM_SPECKLE_WINDOW",
-    "COMPILED_MIN_CELLS",
-    "SGBM_ENV",
     "dense_disparity",
     "sgbm_map",
     "use_compiled",
@@ -202,10 +202,11 @@ def use_compiled(shape: tuple[int, ...], mn: int, num: int, bs: int, uniqueness:
     compiled copy can compute the call (:func:`~scenespeak.perception.stereo.sgbm.supported`,
     Numba installed); ``auto`` (default) only where it was measured to win: the call's cost
     volume holds at least :data:`COMPILED_MIN_CELLS` cells **and** Numba is already loaded in
-    this process. Loading Numba costs a process about 0.6 s of CPU (import 0.2 s, the first
-    compiled call 0.4 s; docs/stereo.md), more than the compiled SGBM saves on one 1920×1080
-    pair, so ``auto`` never loads it for SGBM alone. The map is the same either way, so the
-    choice changes only the time. ``SCENESPEAK_NO_NUMBA=1`` means ``opencv``.
+    this process. Loading Numba costs a process 0.6-0.85 s of CPU (import 0.2-0.34 s, the
+    first compiled call 0.4-0.5 s; docs/calibration.md), more than the compiled SGBM saves on
+    one 1920×1080 pair (about 0.35 s), so ``auto`` never loads it for SGBM alone. The map is
+    the same either way, so the choice changes only the time. ``SCENESPEAK_NO_NUMBA=1`` means
+    ``opencv``.
     """
     value = os.environ.get(SGBM_ENV, "auto").strip().lower()
     if value not in ("auto", "opencv", "numba"):
@@ -213,7 +214,7 @@ def use_compiled(shape: tuple[int, ...], mn: int, num: int, bs: int, uniqueness:
     if value == "opencv" or os.environ.get("SCENESPEAK_NO_NUMBA", "") not in ("", "0"):
         return False
     p2 = SGBM_P2_PER_PIXEL * bs * bs
-    if not (sgbm.available() and sgbm.supported((shape[0], shape[1]), num, bs, p2, uniqueness)):
+    if not (sgbm.available() and sgbm.supported((shape[0], shape[1]), mn, num, bs, p2, uniqueness)):
         return False
     if value == "numba":
         return True

@@ -16,8 +16,8 @@ left-right check; ``modules/stereo/src/stereosgbm.cpp``):
 * then OpenCV's own ``medianBlur`` (3×3) and ``filterSpeckles``, the two steps ``compute``
   ends with.
 
-Where it is used, and why only there: :mod:`scenespeak.perception.stereo.dense` (docs/stereo.md,
-"The dense map without OpenCV's SGBM").
+Where it is used, and why only there: :func:`scenespeak.perception.stereo.dense.use_compiled`
+(docs/calibration.md, "The dense map without OpenCV's SGBM").
 """
 
 from __future__ import annotations
@@ -66,17 +66,27 @@ def fits_int16(block_size: int, p2: int, uniqueness: int) -> bool:
     return max(total, thresh) <= 32767
 
 
-def supported(shape: tuple[int, int], num_disparities: int, block_size: int, p2: int, uniqueness: int) -> bool:
+def supported(
+    shape: tuple[int, int],
+    min_disparity: int,
+    num_disparities: int,
+    block_size: int,
+    p2: int,
+    uniqueness: int,
+) -> bool:
     """Whether :func:`sgbm3way` computes this call (else it raises ``ValueError``): D a
-    positive multiple of 16, an odd block, no int16 saturation (:func:`fits_int16`), and
-    enough rows for OpenCV's 4 overlapping stripes.
+    positive multiple of 16, an odd block, no int16 saturation (:func:`fits_int16`), at least
+    one column with every candidate partner inside the right image (OpenCV fails without),
+    and enough rows for OpenCV's 4 overlapping stripes.
 
-    >>> supported((480, 640), 64, 3, 288, 10), supported((20, 640), 64, 3, 288, 10)
+    >>> supported((480, 640), 0, 64, 3, 288, 10), supported((8, 640), 0, 64, 3, 288, 10)
     (True, False)
     """
-    h = int(shape[0])
-    nd, bs = int(num_disparities), int(block_size)
+    h, w = int(shape[0]), int(shape[1])
+    mn, nd, bs = int(min_disparity), int(num_disparities), int(block_size)
     if nd <= 0 or nd % 16 or bs < 1 or bs % 2 == 0 or not 0 <= uniqueness < 100:
+        return False
+    if w - max(mn + nd, 0) + min(mn, 0) <= 0:
         return False
     stripe_sz = math.ceil(h / STRIPES)
     return fits_int16(bs, p2, uniqueness) and stripe_sz >= bs // 2 + 1 + math.ceil(0.1 * stripe_sz)
@@ -148,7 +158,10 @@ def sgbm3way(
     stripe_sz = math.ceil(h / STRIPES)
     overlap = bs // 2 + 1 + math.ceil(0.1 * stripe_sz)
     if w - max(mn + nd, 0) + min(mn, 0) <= 0:
-        return np.full((h, w), invalid, np.int16)
+        raise ValueError(
+            f"sgbm3way: no column of the {w}-px images has all of disparities {mn}..{mn + nd - 1}"
+            " inside the right image"
+        )
     if stripe_sz < overlap:
         raise ValueError(f"sgbm3way: {h} rows are too few for OpenCV's 4 overlapping stripes")
     k = _kernel()
@@ -175,12 +188,12 @@ def sgbm3way(
     else:
         with ThreadPoolExecutor(max_workers=workers) as pool:
             list(pool.map(run, range(STRIPES)))
-    disp = np.empty((h, w), np.int16)
+    raw = np.empty((h, w), np.int16)  # OpenCV's assembly: row i from stripe i // stripe_sz
     for n in range(STRIPES):
         a, b = n * stripe_sz, min(h, (n + 1) * stripe_sz)
         if a < b:
-            disp[a:b] = parts[n][overlap : overlap + b - a]
-    disp = np.asarray(cv2.medianBlur(disp, 3))
+            raw[a:b] = parts[n][overlap : overlap + b - a]
+    disp: Any = cv2.medianBlur(raw, 3)
     if speckle_window > 0:
         disp, _ = cv2.filterSpeckles(disp, invalid, int(speckle_window), 16 * int(speckle_range))
-    return np.asarray(disp)
+    return np.asarray(disp, np.int16)
