@@ -49,8 +49,7 @@ t1, c1 = time.perf_counter(), time.process_time()
 import numpy as np
 from scenespeak.perception.stereo import sgbm
 g = np.zeros((64, 200), np.uint8)
-sgbm.sgbm3way(g, g, min_disparity=0, num_disparities=16, block_size=3, p1=72, p2=288,
-              uniqueness=10, disp12_max_diff=1, speckle_window=100, speckle_range=2)
+sgbm.sgbm3way(g, g, sgbm.SgbmParams(0, 16, 3, 72, 288, 10, 1, 100, 2))
 t2, c2 = time.perf_counter(), time.process_time()
 print(f"{t1 - t0:.3f} {c1 - c0:.3f} {t2 - t1:.3f} {c2 - c1:.3f}")
 """
@@ -129,15 +128,20 @@ def main() -> None:
             mode=cv2.STEREO_SGBM_MODE_SGBM_3WAY,
         )
 
-        def compiled(
-            cl: Any = cl, cr: Any = cr, mn: int = mn, num: int = num, p1: int = p1, p2: int = p2
-        ) -> Any:
-            return stereo.sgbm.sgbm3way(
-                cl, cr, min_disparity=mn, num_disparities=num, block_size=bs, p1=p1, p2=p2,
-                uniqueness=10, disp12_max_diff=stereo.SGBM_DISP12_MAX_DIFF,
-                speckle_window=stereo.SGBM_SPECKLE_WINDOW,
-                speckle_range=stereo.SGBM_SPECKLE_RANGE, threads=threads,
-            )  # fmt: skip
+        params = stereo.sgbm.SgbmParams(
+            min_disparity=mn,
+            num_disparities=num,
+            block_size=bs,
+            p1=p1,
+            p2=p2,
+            uniqueness=10,
+            disp12_max_diff=stereo.SGBM_DISP12_MAX_DIFF,
+            speckle_window=stereo.SGBM_SPECKLE_WINDOW,
+            speckle_range=stereo.SGBM_SPECKLE_RANGE,
+        )
+
+        def compiled(cl: Any = cl, cr: Any = cr, params: Any = params) -> Any:
+            return stereo.sgbm.sgbm3way(cl, cr, params, threads=threads)
 
         cases: dict[str, Callable[[], object]] = {
             "OpenCV": lambda m=matcher, cl=cl, cr=cr: m.compute(cl, cr),

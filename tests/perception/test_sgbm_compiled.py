@@ -43,20 +43,14 @@ def _opencv(left: np.ndarray, right: np.ndarray, mn: int, nd: int, bs: int, u: i
     return np.asarray(m.compute(left, right))
 
 
-def _compiled(left: np.ndarray, right: np.ndarray, mn: int, nd: int, bs: int, u: int) -> np.ndarray:
-    return sgbm.sgbm3way(
-        left,
-        right,
-        min_disparity=mn,
-        num_disparities=nd,
-        block_size=bs,
-        p1=8 * bs * bs,
-        p2=32 * bs * bs,
-        uniqueness=u,
-        disp12_max_diff=1,
-        speckle_window=100,
-        speckle_range=2,
-    )
+def _params(mn: int, nd: int, bs: int, u: int) -> sgbm.SgbmParams:
+    return sgbm.SgbmParams(mn, nd, bs, 8 * bs * bs, 32 * bs * bs, u, 1, 100, 2)
+
+
+def _compiled(
+    left: np.ndarray, right: np.ndarray, mn: int, nd: int, bs: int, u: int, **kw: int
+) -> np.ndarray:
+    return sgbm.sgbm3way(left, right, _params(mn, nd, bs, u), **kw)
 
 
 def _pair(seed: int, h: int, w: int, shift: int, texture: int) -> tuple[np.ndarray, np.ndarray]:
@@ -109,23 +103,14 @@ def test_ties_are_broken_as_opencvs_8_lanes_break_them() -> None:
     want = _opencv(img, img, 0, 32, 3, 0)
     assert np.array_equal(_compiled(img, img, 0, 32, 3, 0), want)
     for lanes in (16, 32):
-        other = sgbm.sgbm3way(
-            img, img, min_disparity=0, num_disparities=32, block_size=3, p1=72, p2=288,
-            uniqueness=0, disp12_max_diff=1, speckle_window=100, speckle_range=2, lanes=lanes,
-        )  # fmt: skip
+        other = _compiled(img, img, 0, 32, 3, 0, lanes=lanes)
         assert not np.array_equal(other, want)
 
 
 def test_threads_do_not_change_the_map() -> None:
     left, right = _pair(11, 80, 180, 12, 3)
-    one = sgbm.sgbm3way(
-        left, right, min_disparity=0, num_disparities=32, block_size=3, p1=72, p2=288,
-        uniqueness=10, disp12_max_diff=1, speckle_window=100, speckle_range=2, threads=1,
-    )  # fmt: skip
-    two = sgbm.sgbm3way(
-        left, right, min_disparity=0, num_disparities=32, block_size=3, p1=72, p2=288,
-        uniqueness=10, disp12_max_diff=1, speckle_window=100, speckle_range=2, threads=2,
-    )  # fmt: skip
+    one = _compiled(left, right, 0, 32, 3, 10, threads=1)
+    two = _compiled(left, right, 0, 32, 3, 10, threads=2)
     assert np.array_equal(one, two)
 
 

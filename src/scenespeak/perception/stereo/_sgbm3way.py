@@ -117,81 +117,63 @@ def _box_start(p: np.ndarray, half: int, out: np.ndarray) -> None:  # pragma: no
 
 
 @njit(cache=True, nogil=True)
-def _row(  # noqa: C901 (each column's steps in one loop on purpose: its rows stay in L1)
-    ch1: np.ndarray,
-    ch2r: np.ndarray,
-    k: int,
-    y0: int,
-    first: bool,
-    min_x1: int,
-    min_d: int,
-    half: int,
-    padd: np.ndarray,
-    psub: np.ndarray,
-    hadd: np.ndarray,
-    hsub: np.ndarray,
-    cvol: np.ndarray,
-    paths: bool,
-    left: np.ndarray,
-    top: np.ndarray,
-    top_min: np.ndarray,
-    tmp: np.ndarray,
-    lt: np.ndarray,
-    p1: int,
-    p2: int,
+def _row(
+    imgs: tuple, k: int, paths_on: bool, geo: tuple, weights: tuple, bufs: tuple, pen: tuple
 ) -> None:  # pragma: no cover - compiled
-    """One image row k into a stripe's running block costs, then (``paths``) the left-to-right
-    and the top-to-bottom paths of the current row, summed into ``lt``; column by column, so
-    that every row of d stays in the L1 cache between its steps.
+    """One image row k into a stripe's running block costs, then (``paths_on``) the left and
+    top paths of the current row, summed into ``lt``; column by column, so that every row of d
+    stays in the L1 cache between its steps (one loop on purpose: a call per column costs more
+    than the column).
 
     Block costs (``getRawMatchingCost``): ``padd`` gets row k's pixel costs (uint8, at most
     93) when k is inside the image (below it, ``padd`` holds the last row's, as OpenCV reuses
     them); ``hadd`` and ``hsub`` are the running horizontal box sums of ``padd`` and of
     ``psub`` (the row leaving the box), made column by column as OpenCV makes its rows of them;
-    ``cvol += hadd - hsub``, or on a stripe's ``first`` row ``cvol += hadd · (half + 1 if
-    k == y0 else 1)`` (rows above the stripe replicate its first).
+    ``cvol += hadd · wa - hsub · ws`` with ``weights`` (wa, ws): (1, 1) on most rows; on a
+    stripe's first row (half + 1, 0) for its first image row (rows above the stripe replicate
+    it), then (1, 0).
 
     Paths: Hirschmüller's eq. 13 in OpenCV's form, ``L[d] = C[d] + min(min(prev[d-1],
     prev[d+1]) + P1, prev[d], min(prev) + P2) - (min(prev) + P2)``, over rows padded with
     ``SHRT_MAX - P1`` at d = -1 and d = D (OpenCV's SHRT_MAX saturates; this never wraps).
     ``top`` (each column's previous top path) and ``top_min`` are updated in place.
+
+    ``imgs``: (left channels, mirrored right channels); ``geo``: (min_x1, min_d, half);
+    ``bufs``: (padd, psub, hadd, hsub, cvol, left, top, top_min, tmp, lt); ``pen``: (P1, P2).
     """
+    ch1, ch2r = imgs
+    min_x1, min_d, half = geo
+    wa, ws = np.int16(weights[0]), np.int16(weights[1])
+    padd, psub, hadd, hsub, cvol, left, top, top_min, tmp, lt = bufs
+    p1, p2 = pen
     h = ch1.shape[0]
-    w1, nd = cvol.shape
-    fresh = k < h
-    scale = np.int16(half + 1) if k == y0 else np.int16(1)
     w = ch1.shape[3]
+    w1, nd = cvol.shape
     r1 = ch1[min(k, h - 1)]
     r2 = ch2r[min(k, h - 1)]
-    if fresh:
-        for j in range(min(half + 1, w1)):
-            _pixel_costs(r1, r2, min_x1 + j, w - 1 - min_x1 - j + min_d, padd, j)
+    last = w1 if k < h else 0  # pixel costs are made for columns < last
+    for j in range(min(half + 1, last)):
+        _pixel_costs(r1, r2, min_x1 + j, w - 1 - min_x1 - j + min_d, padd, j)
     _box_start(padd, half, hadd)
-    if not first:
-        _box_start(psub, half, hsub)
+    _box_start(psub, half, hsub)
     q1 = np.int16(p1)
     left[0, 1 : nd + 1] = 0
     lmin = np.int16(0)
     cur = 0
     for x in range(w1):
+        j = x + half
+        if 0 < x and j < last:
+            _pixel_costs(r1, r2, min_x1 + j, w - 1 - min_x1 - j + min_d, padd, j)
         if x > 0:
-            j = x + half
-            if fresh and j < w1:
-                _pixel_costs(r1, r2, min_x1 + j, w - 1 - min_x1 - j + min_d, padd, j)
             ja = min(j, w1 - 1)
             js = max(x - half - 1, 0)
             for d in range(nd):
                 hadd[d] = np.int16(np.int16(hadd[d] + padd[ja, d]) - padd[js, d])
-            if not first:
-                for d in range(nd):
-                    hsub[d] = np.int16(np.int16(hsub[d] + psub[ja, d]) - psub[js, d])
-        if first:
-            for d in range(nd):
-                cvol[x, d] = np.int16(cvol[x, d] + np.int16(hadd[d] * scale))
-        else:
-            for d in range(nd):
-                cvol[x, d] = np.int16(np.int16(cvol[x, d] + hadd[d]) - hsub[d])
-        if not paths:
+                hsub[d] = np.int16(np.int16(hsub[d] + psub[ja, d]) - psub[js, d])
+        for d in range(nd):
+            c = np.int16(np.int16(cvol[x, d] + np.int16(hadd[d] * wa)) - np.int16(hsub[d] * ws))
+            cvol[x, d] = c
+        if not paths_on:
             continue
         nxt = 1 - cur
         lm = np.int16(lmin + p2)
@@ -237,23 +219,18 @@ def _lane_best(s: np.ndarray, m: int, lanes: int) -> int:  # pragma: no cover - 
 
 @njit(cache=True, nogil=True)
 def _backward(
-    cvol: np.ndarray,
-    right: np.ndarray,
-    lt: np.ndarray,
-    s: np.ndarray,
-    row: np.ndarray,
-    disp2: np.ndarray,
-    disp2cost: np.ndarray,
-    min_x1: int,
-    min_d: int,
-    p1: int,
-    p2: int,
-    uniqueness: int,
-    lanes: int,
+    cvol: np.ndarray, bufs: tuple, geo: tuple, cfg: tuple
 ) -> None:  # pragma: no cover - compiled
     """The right-to-left path of one row, the sum of the three paths, the choice of the
     disparity, the uniqueness test, the reverse map (``disp2``) and the sub-pixel parabola:
-    ``row[min_x1 + x]`` for the pixels that pass (the others are left as they are)."""
+    ``row[min_x1 + x]`` for the pixels that pass (the others are left as they are).
+
+    ``bufs``: (right, lt, s, row, disp2, disp2cost); ``geo``: (min_x1, min_d); ``cfg``: (P1, P2,
+    uniquenessRatio, lanes).
+    """
+    right, lt, s, row, disp2, disp2cost = bufs
+    min_x1, min_d = geo
+    p1, p2, uniqueness, lanes = cfg
     w1, nd = cvol.shape
     w = row.shape[0]
     q1 = np.int16(p1)
@@ -314,25 +291,19 @@ def _backward(
 
 @njit(cache=True, nogil=True)
 def stripe(
-    ch1: np.ndarray,
-    ch2r: np.ndarray,
-    n: int,
-    stripe_sz: int,
-    overlap: int,
-    min_d: int,
-    nd: int,
-    half: int,
-    p1: int,
-    p2: int,
-    uniqueness: int,
-    disp12: int,
-    lanes: int,
-    out: np.ndarray,
-    work: tuple,
+    imgs: tuple, n: int, geom: tuple, cfg: tuple, out: np.ndarray, work: tuple
 ) -> None:  # pragma: no cover - compiled
     """``SGBM3WayMainLoop`` for stripe n: what OpenCV writes into its ``dst_disp[n]`` (``out``,
     ``stripe_sz + overlap`` rows, all set here). ``work``: the buffers of :func:`workspace`
-    (their contents do not matter; one set per thread, reused from stripe to stripe)."""
+    (their contents do not matter; one set per thread, reused from stripe to stripe).
+
+    ``imgs``: (left channels, mirrored right channels) of :func:`channels`; ``geom``:
+    (stripe_sz, overlap); ``cfg``: (minDisparity, numDisparities, blockSize // 2, P1, P2,
+    uniquenessRatio, disp12MaxDiff, lanes).
+    """
+    ch1 = imgs[0]
+    stripe_sz, overlap = geom
+    min_d, nd, half, p1, p2, uniqueness, disp12, lanes = cfg
     h = ch1.shape[0]
     w = ch1.shape[3]
     max_d = min_d + nd
@@ -356,47 +327,55 @@ def stripe(
         left[i, nd + 1] = edge
         right[i, 0] = edge
         right[i, nd + 1] = edge
+    geo = (min_x1, min_d, half)
+    pen = (p1, p2)
+    bcfg = (p1, p2, uniqueness, lanes)
     for y in range(y0, y1):
         if y == y0:  # the stripe's first row: rows y0 .. y0 + half, y0 counted half + 1 times
             for k in range(y0, y0 + half + 1):
                 pk = ring[min(k, h - 1) % hrows]
-                _row(
-                    ch1, ch2r, k, y0, True, min_x1, min_d, half, pk, pk, hadd, hsub, cvol,
-                    k == y0 + half, left, top, top_min, tmp, lt, p1, p2,
-                )  # fmt: skip
+                bufs = (pk, pk, hadd, hsub, cvol, left, top, top_min, tmp, lt)
+                weights = (half + 1 if k == y0 else 1, 0)
+                _row(imgs, k, k == y0 + half, geo, weights, bufs, pen)
         else:
             k = y + half
             pk = ring[min(k, h - 1) % hrows]
             ps = ring[max(y - half - 1, y0) % hrows]
-            _row(
-                ch1, ch2r, k, y0, False, min_x1, min_d, half, pk, ps, hadd, hsub, cvol,
-                True, left, top, top_min, tmp, lt, p1, p2,
-            )  # fmt: skip
+            bufs = (pk, ps, hadd, hsub, cvol, left, top, top_min, tmp, lt)
+            _row(imgs, k, True, geo, (1, 1), bufs, pen)
         # --- backward: right-to-left path, the sum, the choice, uniqueness, sub-pixel
         row = out[dst0 + y - y0]
         disp2[:] = invalid
         disp2cost[:] = _MAX
-        _backward(
-            cvol, right, lt, s, row, disp2, disp2cost, min_x1, min_d, p1, p2, uniqueness, lanes
-        )
-        # --- the pseudo left-right check on this row's reverse map
-        for x in range(min_x1, max_x1):
-            d1 = np.int32(row[x])
-            if d1 == invalid:
-                continue
-            da = d1 >> 4
-            db = (d1 + 15) >> 4
-            xa = x - da
-            xb = x - db
-            if (
-                0 <= xa < w
-                and disp2[xa] >= min_d
-                and abs(np.int32(disp2[xa]) - da) > disp12
-                and 0 <= xb < w
-                and disp2[xb] >= min_d
-                and abs(np.int32(disp2[xb]) - db) > disp12
-            ):
-                row[x] = invalid
+        _backward(cvol, (right, lt, s, row, disp2, disp2cost), (min_x1, min_d), bcfg)
+        _lr_check(row, disp2, (min_x1, max_x1, min_d, disp12))
+
+
+@njit(cache=True, nogil=True)
+def _lr_check(row: np.ndarray, disp2: np.ndarray, geo: tuple) -> None:  # pragma: no cover
+    """OpenCV's pseudo left-right check of one row against its reverse map ``disp2``: a
+    disparity whose floor and ceiling both land on reverse disparities (known ones) more than
+    disp12MaxDiff away is dropped. ``geo``: (min_x1, max_x1, min_d, disp12MaxDiff)."""
+    min_x1, max_x1, min_d, disp12 = geo
+    w = row.shape[0]
+    invalid = (min_d - 1) * 16
+    for x in range(min_x1, max_x1):
+        d1 = np.int32(row[x])
+        if d1 == invalid:
+            continue
+        da = d1 >> 4
+        db = (d1 + 15) >> 4
+        xa = x - da
+        xb = x - db
+        if (
+            0 <= xa < w
+            and disp2[xa] >= min_d
+            and abs(np.int32(disp2[xa]) - da) > disp12
+            and 0 <= xb < w
+            and disp2[xb] >= min_d
+            and abs(np.int32(disp2[xb]) - db) > disp12
+        ):
+            row[x] = invalid
 
 
 def workspace(w: int, w1: int, nd: int, half: int) -> tuple:

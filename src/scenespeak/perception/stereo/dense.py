@@ -166,9 +166,7 @@ def sgbm_map(
     chooses."""
     p1, p2 = SGBM_P1_PER_PIXEL * bs * bs, SGBM_P2_PER_PIXEL * bs * bs
     if use_compiled(cl.shape, mn, num, bs, uniqueness):
-        return sgbm.sgbm3way(
-            cl,
-            cr,
+        params = sgbm.SgbmParams(
             min_disparity=mn,
             num_disparities=num,
             block_size=bs,
@@ -178,8 +176,8 @@ def sgbm_map(
             disp12_max_diff=SGBM_DISP12_MAX_DIFF,
             speckle_window=SGBM_SPECKLE_WINDOW,
             speckle_range=SGBM_SPECKLE_RANGE,
-            threads=max(1, cv2.getNumThreads()),
         )
+        return sgbm.sgbm3way(cl, cr, params, threads=max(1, cv2.getNumThreads()))
     matcher = cv2.StereoSGBM_create(  # type: ignore[attr-defined]
         minDisparity=mn,
         numDisparities=num,

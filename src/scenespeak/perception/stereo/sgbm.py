@@ -27,13 +27,14 @@ import importlib.util
 import math
 import threading
 from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass
 from typing import Any
 
 import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["OPENCV_LANES", "available", "fits_int16", "sgbm3way", "supported"]
+__all__ = ["OPENCV_LANES", "SgbmParams", "available", "fits_int16", "sgbm3way", "supported"]
 
 #: int16 lanes of the vector loop in this OpenCV's SGBM (its baseline build, SSE3: 128-bit
 #: registers; ``stereosgbm.cpp`` is not among the dispatched files). Only the choice among
@@ -96,19 +97,69 @@ def _kernel() -> Any:
     return importlib.import_module("scenespeak.perception.stereo._sgbm3way")
 
 
+@dataclass(frozen=True)
+class SgbmParams:
+    """``cv2.StereoSGBM_create``'s parameters for the 3-way mode (``preFilterCap`` 0, i.e. 15).
+
+    Attributes
+    ----------
+    min_disparity, num_disparities : int
+        The search range; ``num_disparities`` a positive multiple of 16.
+    block_size : int
+        Odd; :func:`fits_int16` must hold with ``p2`` and ``uniqueness``.
+    p1, p2 : int
+        The smoothness penalties, ``0 < p1 < p2``.
+    uniqueness : int
+        uniquenessRatio, 0..99 (0: no test).
+    disp12_max_diff : int
+        > 0.
+    speckle_window, speckle_range : int
+        ``filterSpeckles``' region size (0: none) and range (in pixels; × 16 for the map).
+    """
+
+    min_disparity: int
+    num_disparities: int
+    block_size: int
+    p1: int
+    p2: int
+    uniqueness: int
+    disp12_max_diff: int
+    speckle_window: int
+    speckle_range: int
+
+    def check(self, shape: tuple[int, int]) -> None:
+        """Raise ``ValueError`` naming what is outside the set the copy computes."""
+        h, w = shape
+        mn, nd, bs = self.min_disparity, self.num_disparities, self.block_size
+        if nd <= 0 or nd % 16 or bs < 1 or bs % 2 == 0:
+            raise ValueError(
+                f"sgbm3way: numDisparities {nd} (multiple of 16) / blockSize {bs} (odd)"
+            )
+        if (
+            not (0 < self.p1 < self.p2)
+            or self.disp12_max_diff <= 0
+            or not 0 <= self.uniqueness < 100
+        ):
+            raise ValueError(
+                f"sgbm3way: P1 {self.p1}, P2 {self.p2} (0 < P1 < P2), disp12MaxDiff "
+                f"{self.disp12_max_diff} (> 0), uniquenessRatio {self.uniqueness} (0..99)"
+            )
+        if not fits_int16(bs, self.p2, self.uniqueness):
+            raise ValueError(f"sgbm3way: blockSize {bs} with P2 {self.p2} may saturate int16 costs")
+        if w - max(mn + nd, 0) + min(mn, 0) <= 0:
+            raise ValueError(
+                f"sgbm3way: no column of the {w}-px images has all of disparities "
+                f"{mn}..{mn + nd - 1} inside the right image"
+            )
+        if not supported(shape, mn, nd, bs, self.p2, self.uniqueness):
+            raise ValueError(f"sgbm3way: {h} rows are too few for OpenCV's 4 overlapping stripes")
+
+
 def sgbm3way(
     left: NDArray[np.uint8],
     right: NDArray[np.uint8],
+    params: SgbmParams,
     *,
-    min_disparity: int,
-    num_disparities: int,
-    block_size: int,
-    p1: int,
-    p2: int,
-    uniqueness: int,
-    disp12_max_diff: int,
-    speckle_window: int,
-    speckle_range: int,
     threads: int = 2,
     lanes: int = OPENCV_LANES,
 ) -> NDArray[np.int16]:
@@ -119,11 +170,8 @@ def sgbm3way(
     ----------
     left, right : ndarray of uint8, shape (h, w)
         The rectified gray pair (``cv2`` ``img1``, ``img2``).
-    min_disparity, num_disparities, block_size, p1, p2, uniqueness, disp12_max_diff,
-    speckle_window, speckle_range : int
-        ``StereoSGBM_create``'s parameters (``preFilterCap`` 0, i.e. 15). ``num_disparities``
-        a positive multiple of 16, ``block_size`` odd, ``0 < p1 < p2``, ``disp12_max_diff >
-        0``, and :func:`fits_int16` must hold.
+    params : SgbmParams
+        ``StereoSGBM_create``'s parameters (:meth:`SgbmParams.check` must pass).
     threads : int
         Threads for the 4 stripes (the loops release the GIL).
     lanes : int
@@ -137,50 +185,43 @@ def sgbm3way(
     Raises
     ------
     ValueError
-        Parameters outside that set (use OpenCV for them).
+        Parameters outside that set (use OpenCV for them), or images of different sizes.
     """
     gl = np.ascontiguousarray(left, dtype=np.uint8)
     gr = np.ascontiguousarray(right, dtype=np.uint8)
     if gl.ndim != 2 or gl.shape != gr.shape:
         raise ValueError(f"sgbm3way needs two gray images of one size, got {gl.shape}, {gr.shape}")
     h, w = gl.shape
-    mn, nd, bs = int(min_disparity), int(num_disparities), int(block_size)
-    if nd <= 0 or nd % 16 or bs < 1 or bs % 2 == 0:
-        raise ValueError(f"sgbm3way: numDisparities {nd} (multiple of 16) / blockSize {bs} (odd)")
-    if not (0 < p1 < p2) or disp12_max_diff <= 0 or not 0 <= uniqueness < 100:
-        raise ValueError(
-            f"sgbm3way: P1 {p1}, P2 {p2} (0 < P1 < P2), disp12MaxDiff {disp12_max_diff} (> 0), "
-            f"uniquenessRatio {uniqueness} (0..99)"
-        )
-    if not fits_int16(bs, p2, uniqueness):
-        raise ValueError(f"sgbm3way: blockSize {bs} with P2 {p2} may saturate int16 costs")
-    invalid = (mn - 1) * 16
-    stripe_sz = math.ceil(h / STRIPES)
-    overlap = bs // 2 + 1 + math.ceil(0.1 * stripe_sz)
-    if w - max(mn + nd, 0) + min(mn, 0) <= 0:
-        raise ValueError(
-            f"sgbm3way: no column of the {w}-px images has all of disparities {mn}..{mn + nd - 1}"
-            " inside the right image"
-        )
-    if stripe_sz < overlap:
-        raise ValueError(f"sgbm3way: {h} rows are too few for OpenCV's 4 overlapping stripes")
+    params.check((h, w))
     k = _kernel()
     ch1 = np.empty((h, 2, 3, w), np.uint8)
     ch2 = np.empty((h, 2, 3, w), np.uint8)
     k.channels(gl, ch1, False)
     k.channels(gr, ch2, True)
-    ch2r = ch2
+    raw = _stripes(k, (ch1, ch2), params, max(1, min(STRIPES, int(threads))), int(lanes))
+    disp: Any = cv2.medianBlur(raw, 3)
+    if params.speckle_window > 0:
+        invalid = (params.min_disparity - 1) * 16
+        win, rng = int(params.speckle_window), 16 * int(params.speckle_range)
+        disp, _ = cv2.filterSpeckles(disp, invalid, win, rng)
+    return np.asarray(disp, np.int16)
+
+
+def _stripes(k: Any, imgs: tuple[Any, Any], p: SgbmParams, workers: int, lanes: int) -> Any:
+    """OpenCV's 4 stripes on ``workers`` threads, assembled as OpenCV assembles them (row i
+    from stripe ``i // stripe_sz``): the raw map before the median and speckle filters."""
+    h, w = imgs[0].shape[0], imgs[0].shape[3]
+    mn, nd, bs = p.min_disparity, p.num_disparities, p.block_size
+    stripe_sz = math.ceil(h / STRIPES)
+    overlap = bs // 2 + 1 + math.ceil(0.1 * stripe_sz)
     parts = [np.empty((stripe_sz + overlap, w), np.int16) for _ in range(STRIPES)]
     w1 = w - max(mn + nd, 0) + min(mn, 0)
-    workers = max(1, min(STRIPES, int(threads)))
+    cfg = (mn, nd, bs // 2, p.p1, p.p2, p.uniqueness, p.disp12_max_diff, lanes)
     spaces: dict[int, tuple[Any, ...]] = {}  # one set of buffers per thread of this call
 
     def run(n: int) -> None:
         work = spaces.setdefault(threading.get_ident(), k.workspace(w, w1, nd, bs // 2))
-        k.stripe(
-            ch1, ch2r, n, stripe_sz, overlap, mn, nd, bs // 2, int(p1), int(p2),
-            int(uniqueness), int(disp12_max_diff), int(lanes), parts[n], work,
-        )  # fmt: skip
+        k.stripe(imgs, n, (stripe_sz, overlap), cfg, parts[n], work)
 
     if workers == 1:
         for n in range(STRIPES):
@@ -188,12 +229,9 @@ def sgbm3way(
     else:
         with ThreadPoolExecutor(max_workers=workers) as pool:
             list(pool.map(run, range(STRIPES)))
-    raw = np.empty((h, w), np.int16)  # OpenCV's assembly: row i from stripe i // stripe_sz
+    raw = np.empty((h, w), np.int16)
     for n in range(STRIPES):
         a, b = n * stripe_sz, min(h, (n + 1) * stripe_sz)
         if a < b:
             raw[a:b] = parts[n][overlap : overlap + b - a]
-    disp: Any = cv2.medianBlur(raw, 3)
-    if speckle_window > 0:
-        disp, _ = cv2.filterSpeckles(disp, invalid, int(speckle_window), 16 * int(speckle_range))
-    return np.asarray(disp, np.int16)
+    return raw
