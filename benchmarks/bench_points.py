@@ -17,6 +17,10 @@ command reads them, prints median wall-clock and process-CPU times, interleaved 
 * the command's computation as at a79dafd (main before issue 16 session 8): today's calls with
   the pair-order check's OpenCV matcher (``BFMatcher.knnMatch``) and the band search's
   two-key ``lexsort`` put back (``--no-before`` leaves this column out);
+* with ``--sgbm``: the command's computation with the compiled SGBM
+  (``SCENESPEAK_SGBM=numba``, ``perception/stereo/sgbm.py``; Numba loaded in this process
+  before timing: a fresh process pays 0.6-0.85 s of CPU more, ``bench_sgbm.py``), "now" then
+  with OpenCV's (``SCENESPEAK_SGBM=opencv``);
 
 and checks that the command gives describe's points (``stereo_points(...,
 **StereoOptions().keywords())``), the points of the stage at 55e6388, and the points saved
@@ -26,17 +30,19 @@ are decoded before timing.
 Run::
 
     python benchmarks/bench_points.py [--repeat 5] [--pair LEFT RIGHT] [--sizes 640x480 ...]
+        [--no-before] [--sgbm]
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import hashlib
 import json
 import os
 import statistics
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 from typing import Any
@@ -49,7 +55,7 @@ from scenespeak.perception import calibration, plausibility, stereo
 from scenespeak.perception.blas import single_threaded_blas
 from scenespeak.perception.features import detect, load_image, to_gray
 from scenespeak.perception.stage_options import StereoOptions
-from scenespeak.perception.stereo import matching
+from scenespeak.perception.stereo import dense, matching
 
 ART = Path(__file__).resolve().parents[1] / "../shared/data/real/stereo/middeval2/Art"
 GOLDEN = Path(__file__).resolve().parent / "points_golden.json"
@@ -186,11 +192,28 @@ def pair_arguments(description: str, repeat: int) -> tuple[argparse.Namespace, A
         "--sizes", nargs="+", type=_size, default=[(640, 480), (1280, 960), (1920, 1080)]
     )
     parser.add_argument("--no-before", dest="before", action="store_false")
+    parser.add_argument("--sgbm", action="store_true", help="a column with the compiled SGBM")
     args = parser.parse_args()
     args.paths = args.pair or (ART / "view1.png", ART / "view5.png")
     left0, right0 = (load_image(p, gray=False) for p in args.paths)
     print(f"load average before: {' '.join(f'{x:.2f}' for x in os.getloadavg())}")
     return args, left0, right0
+
+
+@contextlib.contextmanager
+def _sgbm(which: str | None) -> Iterator[None]:
+    """``SCENESPEAK_SGBM`` set to ``which`` (``opencv``, ``numba``; None: as it is) for the
+    block."""
+    old = os.environ.get(dense.SGBM_ENV)
+    if which is not None:
+        os.environ[dense.SGBM_ENV] = which
+    try:
+        yield
+    finally:
+        if old is None:
+            os.environ.pop(dense.SGBM_ENV, None)
+        else:
+            os.environ[dense.SGBM_ENV] = old
 
 
 def resized_pair(left0: Any, right0: Any, size: tuple[int, int]) -> tuple[Any, Any]:
@@ -209,10 +232,12 @@ def main() -> None:
         "| stage 55e6388 / SIFT | command at 55e6388 | command 55e6388 / SIFT "
         "| now = describe's stage | now = stage at 55e6388 | now = saved (55e6388) |"
         + (" command as at a79dafd | a79dafd / SIFT | now = a79dafd |" if args.before else "")
+        + (" compiled SGBM | compiled / SIFT | compiled = now |" if args.sgbm else "")
     )
     print(
         "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | --- | --- | --- |"
         + (" ---: | ---: | --- |" if args.before else "")
+        + (" ---: | ---: | --- |" if args.sgbm else "")
     )
     names = (Path("left"), Path("right"))
     for size in args.sizes:
@@ -225,7 +250,12 @@ def main() -> None:
             )
 
         def now(left: Any = left, right: Any = right, rig: Any = rig) -> Any:
-            return _stereo_points(stereo, left, right, rig, ratio=0.6, sources=names)
+            with _sgbm("opencv" if args.sgbm else None):
+                return _stereo_points(stereo, left, right, rig, ratio=0.6, sources=names)
+
+        def compiled(left: Any = left, right: Any = right, rig: Any = rig) -> Any:
+            with _sgbm("numba"):
+                return _stereo_points(stereo, left, right, rig, ratio=0.6, sources=names)
 
         def sift2(left: Any = left, right: Any = right) -> object:
             return _threaded_sift(left, right)
@@ -242,6 +272,8 @@ def main() -> None:
         cases = {"sift": sift, "sift2": sift2, "now": now, "stage": stage, "command": command}
         if args.before:
             cases["a79dafd"] = before
+        if args.sgbm:
+            cases["compiled"] = compiled
         times: dict[str, list[tuple[float, float]]] = {k: [] for k in cases}
         for _ in range(args.repeat):  # interleaved: they share the machine's load
             for k, fn in cases.items():
@@ -263,6 +295,11 @@ def main() -> None:
             + (
                 f" {cell['a79dafd']} | {_ratio(med, 'a79dafd')} | {_same(got, before())} |"
                 if args.before
+                else ""
+            )
+            + (
+                f" {cell['compiled']} | {_ratio(med, 'compiled')} | {_same(compiled(), got)} |"
+                if args.sgbm
                 else ""
             ),
             flush=True,
