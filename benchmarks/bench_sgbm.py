@@ -37,7 +37,7 @@ import numpy as np
 from scenespeak.perception import calibration, stereo
 from scenespeak.perception.features import load_image, to_gray
 from scenespeak.perception.stage_options import StereoOptions
-from scenespeak.perception.stereo import dense
+from scenespeak.perception.stereo import dense, sgbm
 
 ART = Path(__file__).resolve().parents[1] / "../shared/data/real/stereo/middeval2/Art"
 
@@ -128,7 +128,7 @@ def main() -> None:
             mode=cv2.STEREO_SGBM_MODE_SGBM_3WAY,
         )
 
-        params = stereo.sgbm.SgbmParams(
+        params = sgbm.SgbmParams(
             min_disparity=mn,
             num_disparities=num,
             block_size=bs,
@@ -141,7 +141,7 @@ def main() -> None:
         )
 
         def compiled(cl: Any = cl, cr: Any = cr, params: Any = params) -> Any:
-            return stereo.sgbm.sgbm3way(cl, cr, params, threads=threads)
+            return sgbm.sgbm3way(cl, cr, params, threads=threads)
 
         cases: dict[str, Callable[[], object]] = {
             "OpenCV": lambda m=matcher, cl=cl, cr=cr: m.compute(cl, cr),

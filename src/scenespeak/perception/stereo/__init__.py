@@ -42,7 +42,7 @@ The stage is a small package by concern; every name is importable from here:
 * :mod:`~scenespeak.perception.stereo.matching`: sparse matching (:func:`match_stereo`);
 * :mod:`~scenespeak.perception.stereo.dense`: dense SGBM disparity (:func:`dense_disparity`);
 * :mod:`~scenespeak.perception.stereo.sgbm`: OpenCV's 3-way SGBM compiled with Numba, the same
-  map bit for bit (``dense`` chooses; ``stereo.sgbm.sgbm3way``, not re-exported);
+  map bit for bit (``dense`` chooses; imported by name, not re-exported: kept out of the start-up);
 * :mod:`~scenespeak.perception.stereo.points`: triangulation and a region's dense points;
 * :mod:`~scenespeak.perception.stereo.options`: the options objects (:class:`MatchOptions`,
   :class:`DenseOptions`, :class:`PointsOptions`); the old single keywords still work;

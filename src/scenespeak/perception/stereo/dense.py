@@ -13,7 +13,6 @@ from numpy.typing import ArrayLike, NDArray
 from scenespeak.errors import ImageError
 from scenespeak.perception.calibration import Rectification
 from scenespeak.perception.features import to_gray
-from scenespeak.perception.stereo import sgbm
 from scenespeak.perception.stereo.options import DenseOptions
 from scenespeak.perception.stereo.results import DenseDisparity
 
@@ -166,6 +165,8 @@ def sgbm_map(
     chooses."""
     p1, p2 = SGBM_P1_PER_PIXEL * bs * bs, SGBM_P2_PER_PIXEL * bs * bs
     if use_compiled(cl.shape, mn, num, bs, uniqueness):
+        from scenespeak.perception.stereo import sgbm
+
         params = sgbm.SgbmParams(
             min_disparity=mn,
             num_disparities=num,
@@ -211,13 +212,14 @@ def use_compiled(shape: tuple[int, ...], mn: int, num: int, bs: int, uniqueness:
         raise ValueError(f"{SGBM_ENV}={value!r}: expected auto, opencv or numba")
     if value == "opencv" or os.environ.get("SCENESPEAK_NO_NUMBA", "") not in ("", "0"):
         return False
-    p2 = SGBM_P2_PER_PIXEL * bs * bs
-    if not (sgbm.available() and sgbm.supported((shape[0], shape[1]), mn, num, bs, p2, uniqueness)):
-        return False
-    if value == "numba":
-        return True
     cells = max(0, shape[1] - max(mn + num, 0) + min(mn, 0)) * num * shape[0]
-    return cells >= COMPILED_MIN_CELLS and "numba" in sys.modules
+    if value == "auto" and (cells < COMPILED_MIN_CELLS or "numba" not in sys.modules):
+        return False
+    # imported only now: a process that never runs the copy does not pay for the module
+    from scenespeak.perception.stereo import sgbm
+
+    p2 = SGBM_P2_PER_PIXEL * bs * bs
+    return sgbm.available() and sgbm.supported((shape[0], shape[1]), mn, num, bs, p2, uniqueness)
 
 
 def _to_pixels(raw: NDArray[np.int16], mn: int, out: NDArray[np.float32]) -> None:

@@ -23,10 +23,7 @@ Where it is used, and why only there: :func:`scenespeak.perception.stereo.dense.
 from __future__ import annotations
 
 import importlib
-import importlib.util
 import math
-import threading
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from typing import Any
 
@@ -48,6 +45,8 @@ _PIXEL_COST_MAX = 30 + (255 >> 2)
 
 def available() -> bool:
     """Whether Numba is installed (the compiled loops need it)."""
+    import importlib.util  # here: ``scenespeak points`` does not pay for it at start-up
+
     return importlib.util.find_spec("numba") is not None
 
 
@@ -210,6 +209,9 @@ def sgbm3way(
 def _stripes(k: Any, imgs: tuple[Any, Any], p: SgbmParams, workers: int, lanes: int) -> Any:
     """OpenCV's 4 stripes on ``workers`` threads, assembled as OpenCV assembles them (row i
     from stripe ``i // stripe_sz``): the raw map before the median and speckle filters."""
+    import threading  # here, as the thread pool: not paid by a process that never comes here
+    from concurrent.futures import ThreadPoolExecutor
+
     h, w = imgs[0].shape[0], imgs[0].shape[3]
     mn, nd, bs = p.min_disparity, p.num_disparities, p.block_size
     stripe_sz = math.ceil(h / STRIPES)
