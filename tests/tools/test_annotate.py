@@ -285,7 +285,10 @@ def _env() -> dict[str, str]:
 def test_killed_client_resumes_with_every_pair_once(
     tiny: dict[str, Path], reference: list[str], tmp_path: Path
 ) -> None:
-    copies = 3
+    # enough scenes that both kills land mid-run on a fast idle machine too: each kill comes
+    # at most 2 scenes + 1.5 s after the previous one (3 copies, 9 scenes, let an idle
+    # AVX-512 host finish before the second kill)
+    copies = 8
     root = _links(tmp_path, tiny, copies)
     out = tmp_path / "relations.jsonl"
     n = copies * N_SCENES
