@@ -65,6 +65,7 @@ from scenespeak.perception.recognition.closer import closer_look
 from scenespeak.perception.recognition.colour import ColourModel, name_unknown_objects
 from scenespeak.perception.recognition.options import LabelOptions
 from scenespeak.perception.recognition.results import Labelling
+from scenespeak.perception.recognition.shape_guard import ShapeGuard
 from scenespeak.perception.scene_objects import StrategyOptions, plain_for, scene_objects
 from scenespeak.perception.scene_objects import outline_mask as _outline_mask  # noqa: F401  (pipeline_rgbd)
 from scenespeak.perception.stage_options import StereoOptions
@@ -427,8 +428,11 @@ def _after_stereo(
             if early.look is not None:
                 objects = closer_look(objects, left, rig.K_left, early.look, veto=veto)
             trim = (np.asarray(rig.up, np.float64), replace(opts.objects, radius=None))
+            geo, shape = early.stereo.geometry, None
+            if geo is not None:  # names by colour or grey must fit the segment's shape
+                shape = ShapeGuard(geo.normal, geo.level)
             objects = name_unknown_objects(
-                objects, left, rig.K_left, early.colours, remake=trim, veto=veto
+                objects, left, rig.K_left, early.colours, remake=trim, veto=veto, shape=shape
             )
 
     say("relations")

@@ -13,7 +13,7 @@ from skimage import data
 
 from scenespeak.perception.objects import ObjectOptions, SceneObject, make_object
 from scenespeak.perception.recognition import ObjectDatabase
-from scenespeak.perception.recognition.colour import ColourModel, colour_signature
+from scenespeak.perception.recognition.colour import ColourModel, ColourOptions, colour_signature
 from scenespeak.perception.recognition.colour import name_unknown_objects as name_unknown
 from scenespeak.perception.recognition.grey import (
     GREY_BINS,
@@ -23,6 +23,7 @@ from scenespeak.perception.recognition.grey import (
     name_by_grey,
     view_grey,
 )
+from scenespeak.perception.recognition.shape_guard import ShapeGuard
 
 FLOOR = 145
 K = np.array([[500.0, 0.0, 160.0], [0.0, 500.0, 120.0], [0.0, 0.0, 1.0]])
@@ -141,7 +142,8 @@ def test_an_unknown_grey_segment_is_named_without_the_floor_beside_it() -> None:
     ]
     # off, or without grey signatures (a version-2 file), or two greys of two objects at once:
     # stays unknown
-    assert name_unknown([seg], image, K, MODELS, grey=None)[0].label == "unknown object 1"
+    off = ColourOptions(grey=None)
+    assert name_unknown([seg], image, K, MODELS, options=off)[0].label == "unknown object 1"
     old = {k: ColourModel(m.signatures, m.aspects) for k, m in MODELS.items()}
     assert name_unknown([seg], image, K, old)[0].label == "unknown object 1"
     flat = image.copy()
@@ -163,6 +165,25 @@ def test_a_piece_of_an_object_already_found_is_not_a_second_instance() -> None:
     # a soup 20 cm away is another instance: the segment is "soup 2"
     far = name_unknown([soup_at(240, 260), seg], image, K, MODELS)
     assert [o.name for o in far] == ["soup", "soup 2"]
+
+
+def test_a_cue_name_whose_segment_cannot_be_that_shape_stays_unknown() -> None:
+    image = _scene()  # a soup can's texture, 60 x 40 px at 1 m (8 x 12 cm)
+    seg = _patch_object((100, 60, 140, 120), 1.0)
+    # the floor under the can's foot (row 120 is the image centre's height: y = 0)
+    guard = ShapeGuard(UP, 0.0)
+    (named,) = name_unknown([seg], image, K, MODELS, shape=guard)
+    assert named.label == "soup"
+    # had the soup been learnt squat (its view's box 0.9: the image box of the segment, 1.5,
+    # is within the grey cue's factor 1.8 of it), the segment standing 1.5 times as tall as
+    # wide on the floor is not it
+    squat = np.array([0.9], np.float32)
+    flat = {**MODELS, "soup": dataclasses.replace(MODELS["soup"], grey_aspects=squat)}
+    (refused,) = name_unknown([seg], image, K, flat, shape=guard)
+    assert refused.label == "unknown object 1"
+    assert "not named soup: it stands" in refused.notes[-1]
+    # without the guard the cue names it
+    assert name_unknown([seg], image, K, flat)[0].label == "soup"
 
 
 def _sha(path: Path) -> str:

@@ -34,7 +34,7 @@ from __future__ import annotations
 
 import dataclasses
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import cv2
@@ -51,6 +51,7 @@ from scenespeak.perception.recognition.grey import (
     hellinger,
     name_by_grey,
 )
+from scenespeak.perception.recognition.shape_guard import ShapeGuard
 
 __all__ = [
     "BINS",
@@ -96,6 +97,9 @@ class ColourOptions:
         colour wheel 12 %).
     min_pixels : int
         20 — fewer chromatic pixels than this (of the object's sampled points): not named.
+    grey : GreyOptions or None
+        The grey cue's knobs (:func:`name_unknown_objects`; None: off; models without grey
+        signatures never name by it).
     """
 
     max_distance: float = 0.3
@@ -106,6 +110,7 @@ class ColourOptions:
     model_chroma: float = 0.3
     max_bin: float = 0.65
     min_pixels: int = 20
+    grey: GreyOptions | None = field(default_factory=GreyOptions)
 
 
 @dataclass(frozen=True, eq=False)
@@ -278,8 +283,6 @@ def _object_pixels(
     return rgb, uv.astype(np.float64), idx.astype(np.intp)
 
 
-#: The grey cue's default knobs.
-_GREY = GreyOptions()
 _GREY_NOTE = "named by grey levels, texture and shape"
 #: An unknown object whose footprint comes this near (metres) an object already labelled
 #: ``L`` is not named ``L`` by grey levels: it is a piece of that object that its detection did
@@ -320,8 +323,8 @@ def name_unknown_objects(
     models: Mapping[str, ColourModel],
     options: ColourOptions | None = None,
     remake: tuple[NDArray[np.float64], ObjectOptions] | None = None,
-    grey: GreyOptions | None = _GREY,
     veto: Callable[[SceneObject, str], str | None] | None = None,
+    shape: ShapeGuard | None = None,
 ) -> tuple[SceneObject, ...]:
     """``objects`` with the unknown ones that colour and shape name (:func:`name_by_colour`),
     or grey levels, texture and shape (:func:`~scenespeak.perception.recognition.grey.
@@ -344,17 +347,21 @@ def name_unknown_objects(
         make_object`) of only its points inside the box round its chromatic pixels (named by
         colour) or not like the floor (named by grey levels): the dense map smears an
         object's depth over a plain floor beside it, and those points belong to no object.
-    grey : GreyOptions or None
-        The grey cue's knobs (None: off; models without grey signatures never name by it).
     veto : callable, optional
         ``veto(obj, label)``: why ``obj`` cannot be named ``label`` by colour (None: it may
         be), e.g. :meth:`scenespeak.perception.known_evidence.KeypointEvidence.refuses`; a
         vetoed object stays unknown with a note saying why. Not asked of names by grey
         levels: the grey cue's textures (a cell photo, a star field) give keypoints that are
         not distinctive enough to pass the ratio test, so few votes say nothing there.
+    shape : ShapeGuard, optional
+        With it, a name by colour or grey levels whose segment, stood on the support plane,
+        has a silhouette that fits none of the name's training views is refused
+        (:mod:`~scenespeak.perception.recognition.shape_guard`): the object stays unknown
+        with a note saying why.
     """
     o = options or ColourOptions()
     img = np.asarray(image)
+    grey = o.grey
     if not models or img.ndim != 3 or img.shape[2] < 3 or img.dtype != np.uint8:
         return tuple(objects)
     scene = _Scene(img[..., :3], np.asarray(camera, np.float64), models, o, grey)
@@ -366,7 +373,7 @@ def name_unknown_objects(
         if named is None or (named[1].startswith(_GREY_NOTE) and _piece_of(obj, named[0], out)):
             continue
         label, note, keep = named
-        refused = _vetoed(obj, label, note, veto)
+        refused = _vetoed(obj, label, note, veto) or _misshapen(obj, keep, label, models, shape)
         if refused is not None:
             out[i] = refused
             continue
@@ -392,6 +399,25 @@ def _vetoed(
     if veto is None or note.startswith(_GREY_NOTE):
         return None
     why = veto(obj, label)
+    if why is None:
+        return None
+    return dataclasses.replace(obj, notes=(*obj.notes, f"not named {label}: {why}"))
+
+
+def _misshapen(
+    obj: SceneObject,
+    keep: NDArray[np.intp],
+    label: str,
+    models: Mapping[str, ColourModel],
+    shape: ShapeGuard | None,
+) -> SceneObject | None:
+    """``obj`` still unknown with a note saying why, when ``shape`` refuses its points ``keep``
+    as ``label`` (its views' object boxes, else their chromatic boxes); None when it may be."""
+    if shape is None:
+        return None
+    m = models[label]
+    views = m.grey_aspects if m.grey_aspects is not None else m.aspects
+    why = shape.refuses(np.asarray(obj.xyz)[keep], views)
     if why is None:
         return None
     return dataclasses.replace(obj, notes=(*obj.notes, f"not named {label}: {why}"))
