@@ -207,6 +207,16 @@ def _plane_from(p: NDArray[np.float64]) -> tuple[NDArray[np.float64], float] | N
     return n, float(n @ p[0])
 
 
+def _level_near(h: NDArray[np.floating], level0: float, tolerance: float) -> float:
+    """The median of the heights ``h`` within ``tolerance`` of ``level0`` (``level0`` if none).
+
+    >>> _level_near(np.array([0.0, 0.01, 0.02, 0.5]), 0.01, 0.015)
+    0.01
+    """
+    on = h[np.abs(h - level0) <= tolerance]
+    return float(np.median(on)) if len(on) else float(level0)
+
+
 def support_plane(
     xyz: NDArray[np.float64],
     up: NDArray[np.float64],
@@ -249,8 +259,7 @@ def support_plane(
     level0 = lo + (first + 0.5) * opts.band
     near = p[np.abs(h - level0) <= 3 * opts.band]
     if opts.up_tolerance_deg <= 0:  # the normal is up: only the level is measured
-        on = h[np.abs(h - level0) <= opts.plane_tolerance]
-        return u, float(np.median(on)) if len(on) else level0
+        return u, _level_near(h, level0, opts.plane_tolerance)
     best = (u, level0)
     if len(near) >= 3:
         rng = np.random.default_rng(seed)
