@@ -45,7 +45,6 @@ from __future__ import annotations
 import time
 from collections.abc import Callable, Collection, Mapping
 from concurrent.futures import Executor, ThreadPoolExecutor
-from contextlib import nullcontext
 from dataclasses import dataclass, field, replace
 from functools import partial
 from os import PathLike
@@ -74,7 +73,6 @@ from scenespeak.pipeline_threads import (
     Say,
     StereoStage,
     label_and_finish,
-    short_gil_slices,
 )
 from scenespeak.pipeline_threads import fill as _fill
 from scenespeak.pipeline_threads import plain_promise as _plain_promise
@@ -304,8 +302,7 @@ def describe_scene(
     # shared 2-core machine), so BLAS runs single-threaded throughout.
     say("sift")
     pool_cm = ThreadPoolExecutor(max_workers=1) if opts.threads > 1 else InlineExecutor()
-    slices = short_gil_slices() if opts.threads > 1 else nullcontext()
-    with single_threaded_blas(), slices, pool_cm as pool:
+    with single_threaded_blas(), pool_cm as pool:
         t0 = time.perf_counter()
         future_r = pool.submit(detect, to_gray(right), precise_upscale=False)
         feats_l = detect(to_gray(left), precise_upscale=False)
