@@ -114,31 +114,8 @@ def main() -> None:
         cl, cr, mn, num = stage_crop(gl, gr, rig)
         h, w = cl.shape
         cells = max(0, w - max(mn + num, 0) + min(mn, 0)) * num * h
-        p1, p2 = stereo.SGBM_P1_PER_PIXEL * bs * bs, stereo.SGBM_P2_PER_PIXEL * bs * bs
-        matcher = cv2.StereoSGBM_create(  # type: ignore[attr-defined]
-            minDisparity=mn,
-            numDisparities=num,
-            blockSize=bs,
-            P1=p1,
-            P2=p2,
-            disp12MaxDiff=stereo.SGBM_DISP12_MAX_DIFF,
-            uniquenessRatio=10,
-            speckleWindowSize=stereo.SGBM_SPECKLE_WINDOW,
-            speckleRange=stereo.SGBM_SPECKLE_RANGE,
-            mode=cv2.STEREO_SGBM_MODE_SGBM_3WAY,
-        )
-
-        params = sgbm.SgbmParams(
-            min_disparity=mn,
-            num_disparities=num,
-            block_size=bs,
-            p1=p1,
-            p2=p2,
-            uniqueness=10,
-            disp12_max_diff=stereo.SGBM_DISP12_MAX_DIFF,
-            speckle_window=stereo.SGBM_SPECKLE_WINDOW,
-            speckle_range=stereo.SGBM_SPECKLE_RANGE,
-        )
+        matcher = dense.opencv_sgbm(mn, num, bs, 10)
+        params = dense.compiled_params(mn, num, bs, 10)
 
         def compiled(cl: Any = cl, cr: Any = cr, params: Any = params) -> Any:
             return sgbm.sgbm3way(cl, cr, params, threads=threads)

@@ -31,10 +31,11 @@ search that follows (its boxes go to whichever thread is free) adds nothing
 detections (:class:`scenespeak.pipeline_threads.Helper`; ``docs/architecture.md``; the result
 is the same with one thread).
 
-Speed (``benchmarks/bench_pipeline.py --only timing``, 640×480 pair, 5 objects): 1.62× the
-two SIFT extractions one after the other (idle 2-core machine, before the guess); the target
-is 1.3×. CPU, one thread, load 8: the SIFTs ≈ 195 ms, stereo ≈ 35, labelling ≈ 18, finer
-search ≈ 67, plane and segments ≈ 31, objects ≈ 38, relations ≈ 14 ms.
+Speed (``benchmarks/bench_pipeline.py --only timing``, 640×480 pair, 5 objects): 1.14–1.34×
+the two SIFT extractions one after the other, median 1.24× over nine runs (idle 2-core
+AVX-512 machine, 2 Dec 2026 19:18–19:25 UTC); the target is 1.3×. Thread CPU per phase, idle
+(``benchmarks/pipeline_timeline.py``): SIFT 34 + 58 ms, plain background 7, stereo 11,
+labelling 8, finer search 25, plane and segments 8, objects 22, relations 6 ms.
 
 :meth:`SceneDescription.to_dict` gives exactly the JSON of ``docs/interfaces.md`` (plus extra
 fields); :meth:`SceneDescription.to_text` the sentences for people.

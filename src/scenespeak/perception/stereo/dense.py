@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 import os
 import sys
+from typing import TYPE_CHECKING, Any
 
 import cv2
 import numpy as np
@@ -16,6 +17,9 @@ from scenespeak.perception.features import to_gray
 from scenespeak.perception.stereo.options import DenseOptions
 from scenespeak.perception.stereo.results import DenseDisparity
 
+if TYPE_CHECKING:
+    from scenespeak.perception.stereo.sgbm import SgbmParams
+
 __all__ = [
     "COMPILED_MIN_CELLS",
     "SGBM_DISP12_MAX_DIFF",
@@ -24,7 +28,9 @@ __all__ = [
     "SGBM_P2_PER_PIXEL",
     "SGBM_SPECKLE_RANGE",
     "SGBM_SPECKLE_WINDOW",
+    "compiled_params",
     "dense_disparity",
+    "opencv_sgbm",
     "sgbm_map",
     "use_compiled",
 ]
@@ -163,35 +169,47 @@ def sgbm_map(
     module's constants), from OpenCV or from the compiled copy of it, which gives the same
     int16 map bit for bit (:mod:`~scenespeak.perception.stereo.sgbm`); :func:`use_compiled`
     chooses."""
-    p1, p2 = SGBM_P1_PER_PIXEL * bs * bs, SGBM_P2_PER_PIXEL * bs * bs
     if use_compiled(cl.shape, mn, num, bs, uniqueness):
         from scenespeak.perception.stereo import sgbm
 
-        params = sgbm.SgbmParams(
-            min_disparity=mn,
-            num_disparities=num,
-            block_size=bs,
-            p1=p1,
-            p2=p2,
-            uniqueness=uniqueness,
-            disp12_max_diff=SGBM_DISP12_MAX_DIFF,
-            speckle_window=SGBM_SPECKLE_WINDOW,
-            speckle_range=SGBM_SPECKLE_RANGE,
-        )
+        params = compiled_params(mn, num, bs, uniqueness)
         return sgbm.sgbm3way(cl, cr, params, threads=max(1, cv2.getNumThreads()))
-    matcher = cv2.StereoSGBM_create(  # type: ignore[attr-defined]
+    return np.asarray(opencv_sgbm(mn, num, bs, uniqueness).compute(cl, cr))
+
+
+def opencv_sgbm(mn: int, num: int, bs: int, uniqueness: int) -> Any:
+    """OpenCV's ``StereoSGBM`` (3-way mode) with the stage's parameters: P1 = 8·bs², P2 =
+    32·bs², the left-right check and the speckle filter of this module's constants."""
+    return cv2.StereoSGBM_create(  # type: ignore[attr-defined]
         minDisparity=mn,
         numDisparities=num,
         blockSize=bs,
-        P1=p1,
-        P2=p2,
+        P1=SGBM_P1_PER_PIXEL * bs * bs,
+        P2=SGBM_P2_PER_PIXEL * bs * bs,
         disp12MaxDiff=SGBM_DISP12_MAX_DIFF,
         uniquenessRatio=uniqueness,
         speckleWindowSize=SGBM_SPECKLE_WINDOW,
         speckleRange=SGBM_SPECKLE_RANGE,
         mode=cv2.STEREO_SGBM_MODE_SGBM_3WAY,
     )
-    return np.asarray(matcher.compute(cl, cr))
+
+
+def compiled_params(mn: int, num: int, bs: int, uniqueness: int) -> SgbmParams:
+    """The same parameters as :func:`opencv_sgbm` for the compiled copy
+    (:class:`~scenespeak.perception.stereo.sgbm.SgbmParams`)."""
+    from scenespeak.perception.stereo import sgbm
+
+    return sgbm.SgbmParams(
+        min_disparity=mn,
+        num_disparities=num,
+        block_size=bs,
+        p1=SGBM_P1_PER_PIXEL * bs * bs,
+        p2=SGBM_P2_PER_PIXEL * bs * bs,
+        uniqueness=uniqueness,
+        disp12_max_diff=SGBM_DISP12_MAX_DIFF,
+        speckle_window=SGBM_SPECKLE_WINDOW,
+        speckle_range=SGBM_SPECKLE_RANGE,
+    )
 
 
 def use_compiled(shape: tuple[int, ...], mn: int, num: int, bs: int, uniqueness: int) -> bool:
