@@ -40,9 +40,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from scenespeak.geometry.polygons import polygon_area
-from scenespeak.perception.features import Features, detect, to_gray
+from scenespeak.perception.features import Features, to_gray
 from scenespeak.perception.objects import SceneObject
 from scenespeak.perception.recognition.colour import _piece_of, _renumbered
+from scenespeak.perception.recognition.finer import enlarged_features
 from scenespeak.perception.recognition.label import inside_polygon
 from scenespeak.perception.recognition.results import Detection, Labelling
 from scenespeak.perception.scene_regions import detection_confidence
@@ -108,17 +109,9 @@ def object_region(
 def _enlarged_features(
     gray: NDArray[np.uint8], box: tuple[int, int, int, int], o: CloserOptions
 ) -> Features:
-    """SIFT of ``gray[y0:y1, x0:x1]`` enlarged ``o.upscale`` times, positions and sizes in
-    scene pixels (pixel centres: enlarged pixel i covers crop pixels [i / s, (i + 1) / s))."""
-    x0, y0, x1, y1 = box
-    crop = gray[y0:y1, x0:x1]
-    if crop.size == 0:
-        return Features.empty()
-    s = float(o.upscale)
-    big = cv2.resize(crop, None, fx=s, fy=s, interpolation=cv2.INTER_LINEAR)
-    f = detect(big, contrast_threshold=o.contrast, precise_upscale=False)
-    xy = (f.xy + 0.5) / s - 0.5 + np.array([x0, y0], np.float64)
-    return dataclasses.replace(f, xy=xy, size=(f.size / s).astype(np.float32))
+    """SIFT of ``gray[y0:y1, x0:x1]`` enlarged ``o.upscale`` times at ``o.contrast``
+    (:func:`~scenespeak.perception.recognition.finer.enlarged_features`)."""
+    return enlarged_features(gray, box, o.upscale, o.contrast)
 
 
 def _region_mask(hull: NDArray[np.float64], shape: tuple[int, int], grow: int) -> NDArray[np.bool_]:

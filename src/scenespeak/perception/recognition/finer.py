@@ -112,13 +112,22 @@ def inside_box(xy: NDArray[np.float64], box: NDArray[np.float64]) -> NDArray[np.
 def _crop_features(gray: NDArray[np.uint8], box: NDArray[np.float64], o: LabelOptions) -> Features:
     """SIFT of the box enlarged ``finer_upscale`` times, positions and sizes in scene pixels."""
     x0, y0, x1, y1 = (int(v) for v in np.rint(box))
+    return enlarged_features(gray, (x0, y0, x1, y1), o.finer_upscale, o.finer_contrast)
+
+
+def enlarged_features(
+    gray: NDArray[np.uint8], box: tuple[int, int, int, int], upscale: float, contrast: float
+) -> Features:
+    """SIFT of ``gray[y0:y1, x0:x1]`` enlarged ``upscale`` times (bilinear), at SIFT's
+    ``contrast`` threshold, positions and sizes in scene pixels (pixel centres: enlarged
+    pixel i covers crop pixels [i / s, (i + 1) / s)); empty for an empty box."""
+    x0, y0, x1, y1 = box
     crop = gray[y0:y1, x0:x1]
     if crop.size == 0:
         return Features.empty()
-    s = float(o.finer_upscale)
+    s = float(upscale)
     big = cv2.resize(crop, None, fx=s, fy=s, interpolation=cv2.INTER_LINEAR)
-    f = detect(big, contrast_threshold=o.finer_contrast, precise_upscale=False)
-    # pixel centres: big pixel i covers crop pixels [i / s, (i + 1) / s)
+    f = detect(big, contrast_threshold=contrast, precise_upscale=False)
     xy = (f.xy + 0.5) / s - 0.5 + np.array([x0, y0], np.float64)
     return dataclasses.replace(f, xy=xy, size=(f.size / s).astype(np.float32))
 
