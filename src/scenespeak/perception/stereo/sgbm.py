@@ -31,7 +31,15 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["OPENCV_LANES", "SgbmParams", "available", "fits_int16", "sgbm3way", "supported"]
+__all__ = [
+    "OPENCV_LANES",
+    "SgbmParams",
+    "available",
+    "c_available",
+    "fits_int16",
+    "sgbm3way",
+    "supported",
+]
 
 #: int16 lanes of the vector loop in this OpenCV's SGBM (its baseline build, SSE3: 128-bit
 #: registers; ``stereosgbm.cpp`` is not among the dispatched files). Only the choice among
@@ -44,10 +52,24 @@ _PIXEL_COST_MAX = 30 + (255 >> 2)
 
 
 def available() -> bool:
-    """Whether Numba is installed (the compiled loops need it)."""
+    """Whether Numba is installed (the Numba loops need it)."""
     import importlib.util  # here: ``scenespeak points`` does not pay for it at start-up
 
     return importlib.util.find_spec("numba") is not None
+
+
+def c_available() -> bool:
+    """Whether the C kernel (``_sgbm_c``, built by ``setup.py`` where a C compiler was found
+    at install time) can be imported.
+
+    >>> isinstance(c_available(), bool)
+    True
+    """
+    try:
+        importlib.import_module(_C_MODULE)
+    except ImportError:
+        return False
+    return True
 
 
 def fits_int16(block_size: int, p2: int, uniqueness: int) -> bool:
@@ -90,6 +112,9 @@ def supported(
         return False
     stripe_sz = math.ceil(h / STRIPES)
     return fits_int16(bs, p2, uniqueness) and stripe_sz >= bs // 2 + 1 + math.ceil(0.1 * stripe_sz)
+
+
+_C_MODULE = "scenespeak.perception.stereo._sgbm_c"
 
 
 def _kernel() -> Any:
@@ -161,6 +186,7 @@ def sgbm3way(
     *,
     threads: int = 2,
     lanes: int = OPENCV_LANES,
+    kernel: str = "numba",
 ) -> NDArray[np.int16]:
     """The disparity map of OpenCV's 3-way StereoSGBM with these parameters (int16, 1/16 px,
     ``(min_disparity - 1) · 16`` where unknown), computed by the compiled loops.
@@ -175,6 +201,9 @@ def sgbm3way(
         Threads for the 4 stripes (the loops release the GIL).
     lanes : int
         The vector width whose tie-breaking is reproduced (:data:`OPENCV_LANES`).
+    kernel : {"numba", "c"}
+        The Numba loops (``_sgbm3way.py``, the readable reference) or the C extension
+        (``_sgbm_c.c``, built at install time; :func:`c_available`): the same integers.
 
     Returns
     -------
@@ -184,7 +213,10 @@ def sgbm3way(
     Raises
     ------
     ValueError
-        Parameters outside that set (use OpenCV for them), or images of different sizes.
+        Parameters outside that set (use OpenCV for them), images of different sizes, or an
+        unknown ``kernel``.
+    ImportError
+        ``kernel="c"`` where the extension was not built (reinstall with a C compiler).
     """
     gl = np.ascontiguousarray(left, dtype=np.uint8)
     gr = np.ascontiguousarray(right, dtype=np.uint8)
@@ -192,18 +224,39 @@ def sgbm3way(
         raise ValueError(f"sgbm3way needs two gray images of one size, got {gl.shape}, {gr.shape}")
     h, w = gl.shape
     params.check((h, w))
-    k = _kernel()
-    ch1 = np.empty((h, 2, 3, w), np.uint8)
-    ch2 = np.empty((h, 2, 3, w), np.uint8)
-    k.channels(gl, ch1, False)
-    k.channels(gr, ch2, True)
-    raw = _stripes(k, (ch1, ch2), params, max(1, min(STRIPES, int(threads))), int(lanes))
+    workers = max(1, min(STRIPES, int(threads)))
+    if kernel == "c":
+        raw = _raw_c(gl, gr, params, workers, int(lanes))
+    elif kernel == "numba":
+        k = _kernel()
+        ch1 = np.empty((h, 2, 3, w), np.uint8)
+        ch2 = np.empty((h, 2, 3, w), np.uint8)
+        k.channels(gl, ch1, False)
+        k.channels(gr, ch2, True)
+        raw = _stripes(k, (ch1, ch2), params, workers, int(lanes))
+    else:
+        raise ValueError(f"sgbm3way: kernel {kernel!r}, expected 'c' or 'numba'")
     disp: Any = cv2.medianBlur(raw, 3)
     if params.speckle_window > 0:
         invalid = (params.min_disparity - 1) * 16
         win, rng = int(params.speckle_window), 16 * int(params.speckle_range)
         disp, _ = cv2.filterSpeckles(disp, invalid, win, rng)
     return np.asarray(disp, np.int16)
+
+
+def _raw_c(
+    gl: NDArray[np.uint8], gr: NDArray[np.uint8], p: SgbmParams, workers: int, lanes: int
+) -> NDArray[np.int16]:
+    """The C kernel's raw map (before the median and speckle filters): its own threads over
+    OpenCV's 4 stripes, without the GIL."""
+    c = importlib.import_module(_C_MODULE)
+    h, w = gl.shape
+    raw = np.empty((h, w), np.int16)
+    c.raw(
+        gl, gr, raw, h, w, p.min_disparity, p.num_disparities, p.block_size, p.p1, p.p2,
+        p.uniqueness, p.disp12_max_diff, lanes, workers,
+    )  # fmt: skip
+    return raw
 
 
 def _stripes(k: Any, imgs: tuple[Any, Any], p: SgbmParams, workers: int, lanes: int) -> Any:

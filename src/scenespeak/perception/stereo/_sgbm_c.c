@@ -1,0 +1,349 @@
+/*
+ * OpenCV's 3-way semi-global block matching as plain C loops over int16 (private).
+ *
+ * The raw int16 map (before medianBlur and filterSpeckles) of cv2.StereoSGBM in
+ * MODE_SGBM_3WAY, bit for bit, written from the algorithm as _sgbm3way.py (the Numba copy,
+ * the readable reference) documents it: Hirschmueller 2008, "Stereo Processing by Semiglobal
+ * Matching and Mutual Information", IEEE TPAMI 30(2), eq. 13, in OpenCV's variant
+ * (Birchfield-Tomasi pixel costs, block sums, three paths: left, top, right, a pseudo
+ * left-right check) with OpenCV's 4 fixed stripes and their overlap.
+ *
+ * The hot loops (_sgbm_kernel.h) run over d in int16 (the pixel costs in uint8) so that GCC
+ * vectorises them; with GCC on x86-64 they are compiled three times (x86-64-v4 with
+ * AVX-512BW, x86-64-v3 with AVX2, the baseline) and the widest the CPU runs is picked at run
+ * time (best_isa), so the build stays portable (no -march=native). The callers (sgbm.py)
+ * guarantee that no int16 sum can saturate (sgbm.fits_int16), so plain int16 arithmetic
+ * equals OpenCV's saturating one.
+ */
+#define PY_SSIZE_T_CLEAN
+#include <Python.h>
+
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+#ifndef _WIN32
+#include <pthread.h>
+#endif
+
+
+#define STRIPES 4
+#define MAX_COST 32767 /* SHRT_MAX: OpenCV's MAX_COST */
+
+typedef int16_t i16;
+typedef uint8_t u8;
+
+/* One call: the images' channels, the parameters and the output. */
+typedef struct {
+    int h, w, min_d, nd, half, p1, p2, uniq, disp12, lanes;
+    int min_x1, max_x1, w1, stripe_sz, overlap, hrows;
+    const u8 *ch1; /* [h][2][3][w]: channels() of the left image */
+    const u8 *ch2; /* the same of the right image, each row mirrored */
+    i16 *raw;      /* [h][w]: the map, preset to (min_d - 1) * 16 */
+    int next;      /* the next stripe to take (threads share it) */
+#ifndef _WIN32
+    pthread_mutex_t lock;
+#endif
+    int failed; /* a thread could not allocate its buffers */
+    int isa;    /* the copy of the hot loops that runs (best_isa) */
+} Job;
+
+/* One thread's buffers (their contents do not matter between stripes). */
+typedef struct {
+    u8 *ring;      /* [hrows][w1][nd]: the last rows' pixel costs */
+    i16 *vsum;     /* [w1][nd]: pixel costs summed over the block's rows */
+    i16 *cvol;     /* [w1][nd]: block costs C (P2 + the block's pixel costs) */
+    i16 *top;      /* [w1][nd + 2]: the top path, padded at d = -1 and d = D */
+    i16 *top_min;  /* [w1]: its minima */
+    i16 *lt;       /* [w1][nd]: left + top paths */
+    i16 *left;     /* [2][nd + 2]: the left path, this column's and the previous one */
+    i16 *right;    /* [2][nd + 2]: the right path, likewise */
+    i16 *tmp;      /* [nd]: one top row being made */
+    i16 *hs;       /* [nd]: the running horizontal box sum of vsum */
+    i16 *s;        /* [nd]: one pixel's summed costs */
+    i16 *disp2;    /* [w]: the reverse map of one row */
+    i16 *disp2cost; /* [w]: its costs */
+} Work;
+
+/* ---------------------------------------------------------------------------------------
+ * channels: calcPixelCostBT's two matching channels of one image, for every row, with their
+ * half-pixel minima and maxima (Birchfield & Tomasi 1998).
+ * out[y][c][k][x]: c = 0 the clipped horizontal Sobel response (0..30, preFilterCap 15),
+ * c = 1 the intensity; k = 0 the value, 1 its minimum and 2 its maximum over the half-pixel
+ * neighbours (v + v[x +- 1]) / 2. Columns 0 and w - 1 are 15 in both channels (OpenCV writes
+ * tab[0] there). With `mirror` each row is stored reversed (column w - 1 - x at x), as OpenCV
+ * keeps the right image's, so a left pixel's partners lie at increasing addresses in d.
+ */
+static void channels(const u8 *img, int h, int w, u8 *out, int mirror) {
+    for (int y = 0; y < h; y++) {
+        const u8 *r = img + (size_t)y * w;
+        const u8 *rn = img + (size_t)(y > 0 ? y - 1 : y) * w;
+        const u8 *rs = img + (size_t)(y < h - 1 ? y + 1 : y) * w;
+        u8 *base = out + (size_t)y * 6 * w;
+        u8 *g = base, *v = base + 3 * (size_t)w;
+        g[0] = g[w - 1] = v[0] = v[w - 1] = 15;
+        for (int x = 1; x < w - 1; x++) {
+            int sx = (r[x + 1] - r[x - 1]) * 2 + rn[x + 1] - rn[x - 1] + rs[x + 1] - rs[x - 1];
+            sx = sx < -15 ? -15 : (sx > 15 ? 15 : sx);
+            g[x] = (u8)(sx + 15);
+            v[x] = r[x];
+        }
+        for (int c = 0; c < 2; c++) {
+            u8 *val = base + 3 * (size_t)c * w, *lo = val + w, *hi = val + 2 * (size_t)w;
+            for (int x = 0; x < w; x++) {
+                int u = val[x];
+                int ul = x > 0 ? (u + val[x - 1]) / 2 : u;
+                int ur = x < w - 1 ? (u + val[x + 1]) / 2 : u;
+                int mn = ul < ur ? ul : ur, mx = ul > ur ? ul : ur;
+                lo[x] = (u8)(mn < u ? mn : u);
+                hi[x] = (u8)(mx > u ? mx : u);
+            }
+        }
+        if (mirror) {
+            for (int q = 0; q < 6; q++) {
+                u8 *rr = base + (size_t)q * w;
+                for (int x = 0; x < w / 2; x++) {
+                    u8 t = rr[x];
+                    rr[x] = rr[w - 1 - x];
+                    rr[w - 1 - x] = t;
+                }
+            }
+        }
+    }
+}
+
+/* The disparity OpenCV's vector loop picks among equal summed costs m when the uniqueness
+ * test is off: in each of `lanes` lanes (d mod lanes) the last d with cost m, then the
+ * smallest of those. */
+static int lane_best(const i16 *s, int nd, i16 m, int lanes) {
+    int best = nd;
+    for (int lane = 0; lane < lanes && lane < nd; lane++) {
+        int last = -1;
+        for (int d = lane; d < nd; d += lanes)
+            if (s[d] == m) last = d;
+        if (last >= 0 && last < best) best = last;
+    }
+    return best;
+}
+
+/* OpenCV's pseudo left-right check of one row against its reverse map: a disparity whose
+ * floor and ceiling both land on known reverse disparities more than disp12MaxDiff away is
+ * dropped. */
+static void lr_check(const Job *J, const Work *W, i16 *row) {
+    const int w = J->w, min_d = J->min_d, invalid = (min_d - 1) * 16;
+    const i16 *disp2 = W->disp2;
+    for (int x = J->min_x1; x < J->max_x1; x++) {
+        const int d1 = row[x];
+        if (d1 == invalid) continue;
+        const int da = d1 >> 4, db = (d1 + 15) >> 4, xa = x - da, xb = x - db;
+        if (xa >= 0 && xa < w && disp2[xa] >= min_d && abs(disp2[xa] - da) > J->disp12 &&
+            xb >= 0 && xb < w && disp2[xb] >= min_d && abs(disp2[xb] - db) > J->disp12)
+            row[x] = (i16)invalid;
+    }
+}
+
+/* The hot loops, once per instruction set (see _sgbm_kernel.h). */
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+#define HAVE_X86_COPIES 1
+#define KATTR __attribute__((target("arch=x86-64-v4")))
+#define K(name) name##_v4
+#include "_sgbm_kernel.h"
+#undef KATTR
+#undef K
+#define KATTR __attribute__((target("arch=x86-64-v3")))
+#define K(name) name##_v3
+#include "_sgbm_kernel.h"
+#undef KATTR
+#undef K
+#endif
+#define KATTR
+#define K(name) name##_base
+#include "_sgbm_kernel.h"
+#undef KATTR
+#undef K
+
+/* The widest copy this CPU runs: 2 x86-64-v4 (AVX-512BW), 1 x86-64-v3 (AVX2), 0 baseline. */
+static int best_isa(void) {
+#ifdef HAVE_X86_COPIES
+    __builtin_cpu_init();
+    if (__builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512bw") &&
+        __builtin_cpu_supports("avx512vl") && __builtin_cpu_supports("avx512dq") &&
+        __builtin_cpu_supports("avx512cd") && __builtin_cpu_supports("avx2") &&
+        __builtin_cpu_supports("fma") && __builtin_cpu_supports("bmi2"))
+        return 2;
+    if (__builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma") &&
+        __builtin_cpu_supports("bmi2"))
+        return 1;
+#endif
+    return 0;
+}
+
+static void run_stripe(const Job *J, Work *W, int n) {
+#ifdef HAVE_X86_COPIES
+    if (J->isa == 2) return stripe_v4(J, W, n);
+    if (J->isa == 1) return stripe_v3(J, W, n);
+#endif
+    stripe_base(J, W, n);
+}
+
+static void work_free(Work *W) {
+    free(W->ring);
+    free(W->vsum);
+    free(W->cvol);
+    free(W->top);
+    free(W->top_min);
+    free(W->lt);
+    free(W->left);
+    free(W->right);
+    free(W->tmp);
+    free(W->hs);
+    free(W->s);
+    free(W->disp2);
+    free(W->disp2cost);
+}
+
+static int work_alloc(const Job *J, Work *W) {
+    const size_t cells = (size_t)J->w1 * J->nd, nd = (size_t)J->nd, w = (size_t)J->w;
+    memset(W, 0, sizeof(*W));
+    W->ring = malloc((size_t)J->hrows * cells);
+    W->vsum = malloc(cells * sizeof(i16));
+    W->cvol = malloc(cells * sizeof(i16));
+    W->top = malloc((size_t)J->w1 * (nd + 2) * sizeof(i16));
+    W->top_min = malloc((size_t)J->w1 * sizeof(i16));
+    W->lt = malloc(cells * sizeof(i16));
+    W->left = malloc(2 * (nd + 2) * sizeof(i16));
+    W->right = malloc(2 * (nd + 2) * sizeof(i16));
+    W->tmp = malloc(nd * sizeof(i16));
+    W->hs = malloc(nd * sizeof(i16));
+    W->s = malloc(nd * sizeof(i16));
+    W->disp2 = malloc(w * sizeof(i16));
+    W->disp2cost = malloc(w * sizeof(i16));
+    if (!W->ring || !W->vsum || !W->cvol || !W->top || !W->top_min || !W->lt || !W->left ||
+        !W->right || !W->tmp || !W->hs || !W->s || !W->disp2 || !W->disp2cost) {
+        work_free(W);
+        return -1;
+    }
+    return 0;
+}
+
+/* A thread: takes stripes until none is left, in its own buffers. */
+static void *worker(void *arg) {
+    Job *J = arg;
+    Work W;
+    if (work_alloc(J, &W)) {
+        J->failed = 1;
+        return NULL;
+    }
+    for (;;) {
+        int n;
+#ifndef _WIN32
+        pthread_mutex_lock(&J->lock);
+        n = J->next++;
+        pthread_mutex_unlock(&J->lock);
+#else
+        n = J->next++;
+#endif
+        if (n >= STRIPES) break;
+        run_stripe(J, &W, n);
+    }
+    work_free(&W);
+    return NULL;
+}
+
+/* raw(left, right, out, h, w, min_d, nd, block_size, p1, p2, uniqueness, disp12, lanes,
+ * threads[, isa]): the raw map of the C-contiguous uint8 pair (h, w) into the int16 buffer
+ * `out` (h, w), on `threads` threads without the GIL, with the copy `isa` of the hot loops
+ * (-1, the default: the widest this CPU runs; a wider one than it runs is not taken). */
+static PyObject *py_raw(PyObject *self, PyObject *args) {
+    Py_buffer L, R, O;
+    int h, w, min_d, nd, bs, p1, p2, uniq, disp12, lanes, threads, isa = -1;
+    (void)self;
+    if (!PyArg_ParseTuple(args, "y*y*w*iiiiiiiiiii|i", &L, &R, &O, &h, &w, &min_d, &nd, &bs,
+                          &p1, &p2, &uniq, &disp12, &lanes, &threads, &isa))
+        return NULL;
+    PyObject *result = NULL;
+    u8 *ch = NULL;
+    const Py_ssize_t px = (Py_ssize_t)h * w;
+    Job J;
+    memset(&J, 0, sizeof(J));
+    J.h = h, J.w = w, J.min_d = min_d, J.nd = nd, J.half = bs / 2, J.p1 = p1, J.p2 = p2;
+    J.uniq = uniq, J.disp12 = disp12, J.lanes = lanes;
+    J.isa = isa < 0 || isa > best_isa() ? best_isa() : isa;
+    J.min_x1 = min_d + nd > 0 ? min_d + nd : 0;
+    J.max_x1 = w + (min_d < 0 ? min_d : 0);
+    J.w1 = J.max_x1 - J.min_x1;
+    J.stripe_sz = (h + STRIPES - 1) / STRIPES;
+    J.overlap = J.half + 1 + (J.stripe_sz + 9) / 10; /* ceil(0.1 * stripe_sz) */
+    J.hrows = 2 * J.half + 2;
+    if (h < 1 || w < 3 || nd < 1 || bs < 1 || bs % 2 == 0 || J.w1 < 1 || lanes < 1 ||
+        uniq < 0 || uniq >= 100 || p1 < 1 || p2 <= p1 || L.len != px || R.len != px ||
+        O.len != px * (Py_ssize_t)sizeof(i16) || J.stripe_sz < J.overlap) {
+        PyErr_SetString(PyExc_ValueError,
+                        "_sgbm_c.raw: arguments outside what sgbm.SgbmParams.check allows "
+                        "(or buffers of the wrong size); check them there first");
+        goto done;
+    }
+    ch = malloc((size_t)px * 12);
+    if (!ch) {
+        PyErr_NoMemory();
+        goto done;
+    }
+    J.ch1 = ch;
+    J.ch2 = ch + (size_t)px * 6;
+    J.raw = O.buf;
+    if (threads < 1) threads = 1;
+    if (threads > STRIPES) threads = STRIPES;
+    Py_BEGIN_ALLOW_THREADS
+    channels(L.buf, h, w, ch, 0);
+    channels(R.buf, h, w, ch + (size_t)px * 6, 1);
+    for (Py_ssize_t i = 0; i < px; i++) J.raw[i] = (i16)((min_d - 1) * 16);
+#ifndef _WIN32
+    pthread_mutex_init(&J.lock, NULL);
+    pthread_t tid[STRIPES];
+    int started = 0;
+    for (int t = 1; t < threads; t++)
+        if (pthread_create(&tid[started], NULL, worker, &J) == 0) started++;
+    worker(&J);
+    for (int t = 0; t < started; t++) pthread_join(tid[t], NULL);
+    pthread_mutex_destroy(&J.lock);
+#else
+    worker(&J);
+#endif
+    Py_END_ALLOW_THREADS
+    if (J.failed) {
+        PyErr_NoMemory();
+        goto done;
+    }
+    Py_INCREF(Py_None);
+    result = Py_None;
+done:
+    free(ch);
+    PyBuffer_Release(&L);
+    PyBuffer_Release(&R);
+    PyBuffer_Release(&O);
+    return result;
+}
+
+static PyObject *py_isa(PyObject *self, PyObject *args) {
+    (void)self, (void)args;
+    return PyLong_FromLong(best_isa());
+}
+
+static PyMethodDef methods[] = {
+    {"isa", py_isa, METH_NOARGS,
+     "isa(): the copy of the hot loops raw() runs on this CPU: 2 x86-64-v4 (AVX-512BW), "
+     "1 x86-64-v3 (AVX2), 0 the baseline."},
+    {"raw", py_raw, METH_VARARGS,
+     "raw(left, right, out, h, w, min_disparity, num_disparities, block_size, p1, p2, "
+     "uniqueness, disp12_max_diff, lanes, threads[, isa]): OpenCV's 3-way SGBM map before "
+     "medianBlur and filterSpeckles, into out (int16, h x w)."},
+    {NULL, NULL, 0, NULL},
+};
+
+static struct PyModuleDef module = {
+    PyModuleDef_HEAD_INIT, "_sgbm_c",
+    "OpenCV's 3-way SGBM as ahead-of-time compiled C loops (private; see sgbm.py).", -1,
+    methods,
+};
+
+PyMODINIT_FUNC PyInit__sgbm_c(void) { return PyModule_Create(&module); }
