@@ -37,7 +37,9 @@ typedef uint8_t u8;
 typedef struct {
     int h, w, min_d, nd, half, p1, p2, uniq, disp12, lanes;
     int min_x1, max_x1, w1, stripe_sz, overlap, hrows;
-    const u8 *ch1; /* [h][2][3][w]: channels() of the left image */
+    int wp;        /* the channels' row stride: w + 64 (zero padding after each row) */
+    int ndp;       /* D rounded up to 64: the pixel costs' row stride */
+    const u8 *ch1; /* [h][2][3][wp]: channels() of the left image */
     const u8 *ch2; /* the same of the right image, each row mirrored */
     i16 *raw;      /* [h][w]: the map, preset to (min_d - 1) * 16 */
     int next;      /* the next stripe to take (threads share it) */
@@ -50,15 +52,15 @@ typedef struct {
 
 /* One thread's buffers (their contents do not matter between stripes). */
 typedef struct {
-    u8 *ring;      /* [hrows][w1][nd]: the last rows' pixel costs */
-    i16 *vsum;     /* [w1][nd]: pixel costs summed over the block's rows */
+    u8 *ring;      /* [hrows][w1][ndp]: the last rows' pixel costs */
+    i16 *vsum;     /* [w1][ndp]: pixel costs summed over the block's rows */
     i16 *cvol;     /* [w1][nd]: block costs C (P2 + the block's pixel costs) */
-    i16 *top;      /* [w1][nd + 2]: the top path, padded at d = -1 and d = D */
+    i16 *top[2];   /* [w1][nd + 2]: the top path, padded at d = -1 and d = D; the previous
+                      row's and the one being made, in turn */
     i16 *top_min;  /* [w1]: its minima */
     i16 *lt;       /* [w1][nd]: left + top paths */
     i16 *left;     /* [2][nd + 2]: the left path, this column's and the previous one */
     i16 *right;    /* [2][nd + 2]: the right path, likewise */
-    i16 *tmp;      /* [nd]: one top row being made */
     i16 *hs;       /* [nd]: the running horizontal box sum of vsum */
     i16 *s;        /* [nd]: one pixel's summed costs */
     i16 *disp2;    /* [w]: the reverse map of one row */
@@ -74,13 +76,13 @@ typedef struct {
  * tab[0] there). With `mirror` each row is stored reversed (column w - 1 - x at x), as OpenCV
  * keeps the right image's, so a left pixel's partners lie at increasing addresses in d.
  */
-static void channels(const u8 *img, int h, int w, u8 *out, int mirror) {
+static void channels(const u8 *img, int h, int w, int wp, u8 *out, int mirror) {
     for (int y = 0; y < h; y++) {
         const u8 *r = img + (size_t)y * w;
         const u8 *rn = img + (size_t)(y > 0 ? y - 1 : y) * w;
         const u8 *rs = img + (size_t)(y < h - 1 ? y + 1 : y) * w;
-        u8 *base = out + (size_t)y * 6 * w;
-        u8 *g = base, *v = base + 3 * (size_t)w;
+        u8 *base = out + (size_t)y * 6 * wp;
+        u8 *g = base, *v = base + 3 * (size_t)wp;
         g[0] = g[w - 1] = v[0] = v[w - 1] = 15;
         for (int x = 1; x < w - 1; x++) {
             int sx = (r[x + 1] - r[x - 1]) * 2 + rn[x + 1] - rn[x - 1] + rs[x + 1] - rs[x - 1];
@@ -89,7 +91,7 @@ static void channels(const u8 *img, int h, int w, u8 *out, int mirror) {
             v[x] = r[x];
         }
         for (int c = 0; c < 2; c++) {
-            u8 *val = base + 3 * (size_t)c * w, *lo = val + w, *hi = val + 2 * (size_t)w;
+            u8 *val = base + 3 * (size_t)c * wp, *lo = val + wp, *hi = val + 2 * (size_t)wp;
             for (int x = 0; x < w; x++) {
                 int u = val[x];
                 int ul = x > 0 ? (u + val[x - 1]) / 2 : u;
@@ -101,7 +103,7 @@ static void channels(const u8 *img, int h, int w, u8 *out, int mirror) {
         }
         if (mirror) {
             for (int q = 0; q < 6; q++) {
-                u8 *rr = base + (size_t)q * w;
+                u8 *rr = base + (size_t)q * wp;
                 for (int x = 0; x < w / 2; x++) {
                     u8 t = rr[x];
                     rr[x] = rr[w - 1 - x];
@@ -190,12 +192,12 @@ static void work_free(Work *W) {
     free(W->ring);
     free(W->vsum);
     free(W->cvol);
-    free(W->top);
+    free(W->top[0]);
+    free(W->top[1]);
     free(W->top_min);
     free(W->lt);
     free(W->left);
     free(W->right);
-    free(W->tmp);
     free(W->hs);
     free(W->s);
     free(W->disp2);
@@ -204,22 +206,23 @@ static void work_free(Work *W) {
 
 static int work_alloc(const Job *J, Work *W) {
     const size_t cells = (size_t)J->w1 * J->nd, nd = (size_t)J->nd, w = (size_t)J->w;
+    const size_t pcells = (size_t)J->w1 * J->ndp;
     memset(W, 0, sizeof(*W));
-    W->ring = malloc((size_t)J->hrows * cells);
-    W->vsum = malloc(cells * sizeof(i16));
+    W->ring = malloc((size_t)J->hrows * pcells);
+    W->vsum = malloc(pcells * sizeof(i16));
     W->cvol = malloc(cells * sizeof(i16));
-    W->top = malloc((size_t)J->w1 * (nd + 2) * sizeof(i16));
+    W->top[0] = malloc((size_t)J->w1 * (nd + 2) * sizeof(i16));
+    W->top[1] = malloc((size_t)J->w1 * (nd + 2) * sizeof(i16));
     W->top_min = malloc((size_t)J->w1 * sizeof(i16));
     W->lt = malloc(cells * sizeof(i16));
     W->left = malloc(2 * (nd + 2) * sizeof(i16));
     W->right = malloc(2 * (nd + 2) * sizeof(i16));
-    W->tmp = malloc(nd * sizeof(i16));
     W->hs = malloc(nd * sizeof(i16));
     W->s = malloc(nd * sizeof(i16));
     W->disp2 = malloc(w * sizeof(i16));
     W->disp2cost = malloc(w * sizeof(i16));
-    if (!W->ring || !W->vsum || !W->cvol || !W->top || !W->top_min || !W->lt || !W->left ||
-        !W->right || !W->tmp || !W->hs || !W->s || !W->disp2 || !W->disp2cost) {
+    if (!W->ring || !W->vsum || !W->cvol || !W->top[0] || !W->top[1] || !W->top_min || !W->lt ||
+        !W->left || !W->right || !W->hs || !W->s || !W->disp2 || !W->disp2cost) {
         work_free(W);
         return -1;
     }
@@ -275,6 +278,8 @@ static PyObject *py_raw(PyObject *self, PyObject *args) {
     J.stripe_sz = (h + STRIPES - 1) / STRIPES;
     J.overlap = J.half + 1 + (J.stripe_sz + 9) / 10; /* ceil(0.1 * stripe_sz) */
     J.hrows = 2 * J.half + 2;
+    J.wp = w + 64;
+    J.ndp = (nd + 63) / 64 * 64;
     if (h < 1 || w < 3 || nd < 1 || bs < 1 || bs % 2 == 0 || J.w1 < 1 || lanes < 1 ||
         uniq < 0 || uniq >= 100 || p1 < 1 || p2 <= p1 || L.len != px || R.len != px ||
         O.len != px * (Py_ssize_t)sizeof(i16) || J.stripe_sz < J.overlap) {
@@ -283,19 +288,20 @@ static PyObject *py_raw(PyObject *self, PyObject *args) {
                         "(or buffers of the wrong size); check them there first");
         goto done;
     }
-    ch = malloc((size_t)px * 12);
+    const size_t chs = (size_t)h * 6 * (size_t)J.wp; /* one image's channels */
+    ch = calloc(2 * chs, 1); /* the padding stays 0 */
     if (!ch) {
         PyErr_NoMemory();
         goto done;
     }
     J.ch1 = ch;
-    J.ch2 = ch + (size_t)px * 6;
+    J.ch2 = ch + chs;
     J.raw = O.buf;
     if (threads < 1) threads = 1;
     if (threads > STRIPES) threads = STRIPES;
     Py_BEGIN_ALLOW_THREADS
-    channels(L.buf, h, w, ch, 0);
-    channels(R.buf, h, w, ch + (size_t)px * 6, 1);
+    channels(L.buf, h, w, J.wp, ch, 0);
+    channels(R.buf, h, w, J.wp, ch + chs, 1);
     for (Py_ssize_t i = 0; i < px; i++) J.raw[i] = (i16)((min_d - 1) * 16);
 #ifndef _WIN32
     pthread_mutex_init(&J.lock, NULL);
