@@ -8,8 +8,14 @@ command reads them, prints median wall-clock and process-CPU times, interleaved 
   must take at most this + 25 %), and the two in two threads (as the command runs them);
 * what the command computes now (``cli.points._stereo_points``: the pair checks, among them
   ``check_pair_order`` on the stage's own features, and the pipeline's stereo stage:
-  threaded SIFT, the dense check cropped to the matches + 16 px, ``StereoOptions``);
-* the stage as the command ran it at 55e6388 (main before issue 16 session 6: what this
+  threaded SIFT, the dense check cropped to the matches + 16 px, ``StereoOptions``), with
+  the SGBM the command runs by default (``SCENESPEAK_SGBM`` as in the environment, ``auto``
+  unless set: the C extension ``_sgbm_c`` where it is built, ``dense.sgbm_kernel``; the
+  table says which ran);
+* the same with OpenCV's SGBM (``SCENESPEAK_SGBM=opencv``: the command before the C
+  extension);
+* the stage as the command ran it at 55e6388 (this and the next two with OpenCV's SGBM, as
+  then) (main before issue 16 session 6: what this
   benchmark timed as "points now" then; it left out the command's ``check_pair_order``;
   its calls, on today's library);
 * the whole computation of the command at 55e6388: ``check_pair_order`` with its own two
@@ -17,10 +23,9 @@ command reads them, prints median wall-clock and process-CPU times, interleaved 
 * the command's computation as at a79dafd (main before issue 16 session 8): today's calls with
   the pair-order check's OpenCV matcher (``BFMatcher.knnMatch``) and the band search's
   two-key ``lexsort`` put back (``--no-before`` leaves this column out);
-* with ``--sgbm``: the command's computation with the compiled SGBM
+* with ``--sgbm``: the command's computation with the Numba SGBM
   (``SCENESPEAK_SGBM=numba``, ``perception/stereo/sgbm.py``; Numba loaded in this process
-  before timing: a fresh process pays 0.6-0.85 s of CPU more, ``bench_sgbm.py``), "now" then
-  with OpenCV's (``SCENESPEAK_SGBM=opencv``);
+  before timing: a fresh process pays 0.6-0.85 s of CPU more, ``bench_sgbm.py``);
 
 and checks that the command gives describe's points (``stereo_points(...,
 **StereoOptions().keywords())``), the points of the stage at 55e6388, and the points saved
@@ -156,6 +161,23 @@ def _command_a79dafd(left: Any, right: Any, rig: Any) -> Any:
         plausibility._ratio_matches, matching._group_best = saved
 
 
+def _kernel_of(fn: Callable[[], object]) -> str:
+    """Which SGBM ``fn`` ran (``dense.sgbm_kernel``'s answer at its last call)."""
+    seen: list[str] = []
+    real = dense.sgbm_kernel
+
+    def spy(*a: Any) -> str:
+        seen.append(real(*a))
+        return seen[-1]
+
+    dense.sgbm_kernel = spy  # type: ignore[assignment]
+    try:
+        fn()
+    finally:
+        dense.sgbm_kernel = real  # type: ignore[assignment]
+    return seen[-1] if seen else "none"
+
+
 def _golden(size: tuple[int, int], points: Any, pair: bool) -> str:
     """Whether the points are those saved from 55e6388 (Art only)."""
     if pair or not GOLDEN.exists():
@@ -192,7 +214,7 @@ def pair_arguments(description: str, repeat: int) -> tuple[argparse.Namespace, A
         "--sizes", nargs="+", type=_size, default=[(640, 480), (1280, 960), (1920, 1080)]
     )
     parser.add_argument("--no-before", dest="before", action="store_false")
-    parser.add_argument("--sgbm", action="store_true", help="a column with the compiled SGBM")
+    parser.add_argument("--sgbm", action="store_true", help="a column with the Numba SGBM")
     args = parser.parse_args()
     args.paths = args.pair or (ART / "view1.png", ART / "view5.png")
     left0, right0 = (load_image(p, gray=False) for p in args.paths)
@@ -228,14 +250,16 @@ def main() -> None:
     left_path, right_path = args.paths
     print(f"pair: {left_path} / {right_path}, resized; wall (CPU) medians, s\n")
     print(
-        "| size | SIFT both | SIFT, 2 threads | points now | now / SIFT | stage at 55e6388 "
+        "| size | SIFT both | SIFT, 2 threads | points now | now / SIFT | SGBM now "
+        "| now, OpenCV SGBM | OpenCV SGBM / SIFT | stage at 55e6388 "
         "| stage 55e6388 / SIFT | command at 55e6388 | command 55e6388 / SIFT "
         "| now = describe's stage | now = stage at 55e6388 | now = saved (55e6388) |"
         + (" command as at a79dafd | a79dafd / SIFT | now = a79dafd |" if args.before else "")
-        + (" compiled SGBM | compiled / SIFT | compiled = now |" if args.sgbm else "")
+        + (" Numba SGBM | Numba / SIFT | Numba = now |" if args.sgbm else "")
     )
     print(
-        "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | --- | --- | --- |"
+        "| --- | ---: | ---: | ---: | ---: | --- | ---: | ---: | ---: | ---: | ---: | ---: "
+        "| --- | --- | --- |"
         + (" ---: | ---: | --- |" if args.before else "")
         + (" ---: | ---: | --- |" if args.sgbm else "")
     )
@@ -250,7 +274,10 @@ def main() -> None:
             )
 
         def now(left: Any = left, right: Any = right, rig: Any = rig) -> Any:
-            with _sgbm("opencv" if args.sgbm else None):
+            return _stereo_points(stereo, left, right, rig, ratio=0.6, sources=names)
+
+        def now_opencv(left: Any = left, right: Any = right, rig: Any = rig) -> Any:
+            with _sgbm("opencv"):
                 return _stereo_points(stereo, left, right, rig, ratio=0.6, sources=names)
 
         def compiled(left: Any = left, right: Any = right, rig: Any = rig) -> Any:
@@ -261,15 +288,25 @@ def main() -> None:
             return _threaded_sift(left, right)
 
         def stage(left: Any = left, right: Any = right, rig: Any = rig) -> Any:
-            return _stage_before(left, right, rig)
+            with _sgbm("opencv"):
+                return _stage_before(left, right, rig)
 
         def command(left: Any = left, right: Any = right, rig: Any = rig) -> Any:
-            return _command_before(left, right, rig)
+            with _sgbm("opencv"):
+                return _command_before(left, right, rig)
 
         def before(left: Any = left, right: Any = right, rig: Any = rig) -> Any:
-            return _command_a79dafd(left, right, rig)
+            with _sgbm("opencv"):
+                return _command_a79dafd(left, right, rig)
 
-        cases = {"sift": sift, "sift2": sift2, "now": now, "stage": stage, "command": command}
+        cases = {
+            "sift": sift,
+            "sift2": sift2,
+            "now": now,
+            "opencv": now_opencv,
+            "stage": stage,
+            "command": command,
+        }
         if args.before:
             cases["a79dafd"] = before
         if args.sgbm:
@@ -283,12 +320,16 @@ def main() -> None:
             for k, t in times.items()
         }
         got, old = now(), stage()
+        kernel = _kernel_of(now)
+        if _same(got, now_opencv()) != "yes":
+            kernel += " (NOT OpenCV's points)"
         describe = stereo.stereo_points(left, right, rig, **StereoOptions().keywords()).points
         cell = {k: f"{w:.3f} ({c_:.3f})" for k, (w, c_) in med.items()}
 
         print(
             f"| {size[0]}×{size[1]} | {cell['sift']} | {cell['sift2']} | {cell['now']} | "
-            f"{_ratio(med, 'now')} | {cell['stage']} | {_ratio(med, 'stage')} | "
+            f"{_ratio(med, 'now')} | {kernel} | {cell['opencv']} | {_ratio(med, 'opencv')} | "
+            f"{cell['stage']} | {_ratio(med, 'stage')} | "
             f"{cell['command']} | {_ratio(med, 'command')} | "
             f"{_same(got, describe)} ({len(got.xyz)} points) | {_same(got, old)} | "
             f"{_golden(size, got, args.pair is not None)} |"

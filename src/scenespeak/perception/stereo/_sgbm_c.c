@@ -37,11 +37,11 @@ typedef uint8_t u8;
 typedef struct {
     int h, w, min_d, nd, half, p1, p2, uniq, disp12, lanes;
     int min_x1, max_x1, w1, stripe_sz, overlap, hrows;
-    int wp;        /* the channels' row stride: w + 64 (zero padding after each row) */
-    int ndp;       /* D rounded up to 64: the pixel costs' row stride */
-    const u8 *ch1; /* [h][2][3][wp]: channels() of the left image */
-    const u8 *ch2; /* the same of the right image, each row mirrored */
-    i16 *raw;      /* [h][w]: the map, preset to (min_d - 1) * 16 */
+    int wp;         /* the channel rows' stride: w + 64 (zero padding after each row) */
+    int ndp;        /* D rounded up to 64: the pixel costs' row stride */
+    const u8 *img1; /* [h][w]: the left image */
+    const u8 *img2; /* [h][w]: the right image */
+    i16 *raw;      /* [h][w]: the map (each stripe writes its rows) */
     int next;      /* the next stripe to take (threads share it) */
 #ifndef _WIN32
     pthread_mutex_t lock;
@@ -65,54 +65,10 @@ typedef struct {
     i16 *s;        /* [nd]: one pixel's summed costs */
     i16 *disp2;    /* [w]: the reverse map of one row */
     i16 *disp2cost; /* [w]: its costs */
+    u8 *c1, *c2;   /* [6][wp]: one row's channels (channels_row) of the left image and the
+                      right one (mirrored), the padding 0 */
+    u8 *ctmp;      /* [6][wp]: the right row's before it is mirrored */
 } Work;
-
-/* ---------------------------------------------------------------------------------------
- * channels: calcPixelCostBT's two matching channels of one image, for every row, with their
- * half-pixel minima and maxima (Birchfield & Tomasi 1998).
- * out[y][c][k][x]: c = 0 the clipped horizontal Sobel response (0..30, preFilterCap 15),
- * c = 1 the intensity; k = 0 the value, 1 its minimum and 2 its maximum over the half-pixel
- * neighbours (v + v[x +- 1]) / 2. Columns 0 and w - 1 are 15 in both channels (OpenCV writes
- * tab[0] there). With `mirror` each row is stored reversed (column w - 1 - x at x), as OpenCV
- * keeps the right image's, so a left pixel's partners lie at increasing addresses in d.
- */
-static void channels(const u8 *img, int h, int w, int wp, u8 *out, int mirror) {
-    for (int y = 0; y < h; y++) {
-        const u8 *r = img + (size_t)y * w;
-        const u8 *rn = img + (size_t)(y > 0 ? y - 1 : y) * w;
-        const u8 *rs = img + (size_t)(y < h - 1 ? y + 1 : y) * w;
-        u8 *base = out + (size_t)y * 6 * wp;
-        u8 *g = base, *v = base + 3 * (size_t)wp;
-        g[0] = g[w - 1] = v[0] = v[w - 1] = 15;
-        for (int x = 1; x < w - 1; x++) {
-            int sx = (r[x + 1] - r[x - 1]) * 2 + rn[x + 1] - rn[x - 1] + rs[x + 1] - rs[x - 1];
-            sx = sx < -15 ? -15 : (sx > 15 ? 15 : sx);
-            g[x] = (u8)(sx + 15);
-            v[x] = r[x];
-        }
-        for (int c = 0; c < 2; c++) {
-            u8 *val = base + 3 * (size_t)c * wp, *lo = val + wp, *hi = val + 2 * (size_t)wp;
-            for (int x = 0; x < w; x++) {
-                int u = val[x];
-                int ul = x > 0 ? (u + val[x - 1]) / 2 : u;
-                int ur = x < w - 1 ? (u + val[x + 1]) / 2 : u;
-                int mn = ul < ur ? ul : ur, mx = ul > ur ? ul : ur;
-                lo[x] = (u8)(mn < u ? mn : u);
-                hi[x] = (u8)(mx > u ? mx : u);
-            }
-        }
-        if (mirror) {
-            for (int q = 0; q < 6; q++) {
-                u8 *rr = base + (size_t)q * wp;
-                for (int x = 0; x < w / 2; x++) {
-                    u8 t = rr[x];
-                    rr[x] = rr[w - 1 - x];
-                    rr[w - 1 - x] = t;
-                }
-            }
-        }
-    }
-}
 
 /* The disparity OpenCV's vector loop picks among equal summed costs m when the uniqueness
  * test is off: in each of `lanes` lanes (d mod lanes) the last d with cost m, then the
@@ -202,6 +158,9 @@ static void work_free(Work *W) {
     free(W->s);
     free(W->disp2);
     free(W->disp2cost);
+    free(W->c1);
+    free(W->c2);
+    free(W->ctmp);
 }
 
 static int work_alloc(const Job *J, Work *W) {
@@ -221,8 +180,12 @@ static int work_alloc(const Job *J, Work *W) {
     W->s = malloc(nd * sizeof(i16));
     W->disp2 = malloc(w * sizeof(i16));
     W->disp2cost = malloc(w * sizeof(i16));
+    W->c1 = calloc(6 * (size_t)J->wp, 1);
+    W->c2 = calloc(6 * (size_t)J->wp, 1);
+    W->ctmp = calloc(6 * (size_t)J->wp, 1);
     if (!W->ring || !W->vsum || !W->cvol || !W->top[0] || !W->top[1] || !W->top_min || !W->lt ||
-        !W->left || !W->right || !W->hs || !W->s || !W->disp2 || !W->disp2cost) {
+        !W->left || !W->right || !W->hs || !W->s || !W->disp2 || !W->disp2cost || !W->c1 ||
+        !W->c2 || !W->ctmp) {
         work_free(W);
         return -1;
     }
@@ -265,7 +228,6 @@ static PyObject *py_raw(PyObject *self, PyObject *args) {
                           &p1, &p2, &uniq, &disp12, &lanes, &threads, &isa))
         return NULL;
     PyObject *result = NULL;
-    u8 *ch = NULL;
     const Py_ssize_t px = (Py_ssize_t)h * w;
     Job J;
     memset(&J, 0, sizeof(J));
@@ -288,21 +250,12 @@ static PyObject *py_raw(PyObject *self, PyObject *args) {
                         "(or buffers of the wrong size); check them there first");
         goto done;
     }
-    const size_t chs = (size_t)h * 6 * (size_t)J.wp; /* one image's channels */
-    ch = calloc(2 * chs, 1); /* the padding stays 0 */
-    if (!ch) {
-        PyErr_NoMemory();
-        goto done;
-    }
-    J.ch1 = ch;
-    J.ch2 = ch + chs;
+    J.img1 = L.buf;
+    J.img2 = R.buf;
     J.raw = O.buf;
     if (threads < 1) threads = 1;
     if (threads > STRIPES) threads = STRIPES;
     Py_BEGIN_ALLOW_THREADS
-    channels(L.buf, h, w, J.wp, ch, 0);
-    channels(R.buf, h, w, J.wp, ch + chs, 1);
-    for (Py_ssize_t i = 0; i < px; i++) J.raw[i] = (i16)((min_d - 1) * 16);
 #ifndef _WIN32
     pthread_mutex_init(&J.lock, NULL);
     pthread_t tid[STRIPES];
@@ -323,7 +276,6 @@ static PyObject *py_raw(PyObject *self, PyObject *args) {
     Py_INCREF(Py_None);
     result = Py_None;
 done:
-    free(ch);
     PyBuffer_Release(&L);
     PyBuffer_Release(&R);
     PyBuffer_Release(&O);

@@ -8,36 +8,108 @@
  * copies scalar). A call per column costs little next to its D = 64..304 disparities.
  */
 #define KSTEP static __attribute__((noinline)) KATTR
+#define KINLINE static inline __attribute__((always_inline)) KATTR
 
 /* ---------------------------------------------------------------------------------------
- * Birchfield-Tomasi pixel costs of image row k for the w1 matched columns into `p`
- * ([w1][ndp], uint8): for the left column xl = min_x1 + x and the right one xl - min_d - d,
+ * calcPixelCostBT's two matching channels of image row y, with their half-pixel minima and
+ * maxima (Birchfield & Tomasi 1998), into out[c * 3 + k][x] (rows wp apart): c = 0 the
+ * clipped horizontal Sobel response (0..30, preFilterCap 15), c = 1 the intensity; k = 0 the
+ * value, 1 its minimum and 2 its maximum over the half-pixel neighbours (v + v[x +- 1]) / 2.
+ * Columns 0 and w - 1 are 15 in both channels (OpenCV writes tab[0] there). With `mirror`
+ * the rows are stored reversed (column w - 1 - x at x; made in tmp first), as OpenCV keeps
+ * the right image's, so that a left pixel's partners lie at increasing addresses in d.
+ */
+KSTEP void K(channels_row)(const u8 *restrict img, int h, int w, int wp, int y,
+                           u8 *restrict out, u8 *restrict tmp, int mirror) {
+    const u8 *r = img + (size_t)y * w;
+    const u8 *rn = img + (size_t)(y > 0 ? y - 1 : y) * w;
+    const u8 *rs = img + (size_t)(y < h - 1 ? y + 1 : y) * w;
+    u8 *dst = mirror ? tmp : out;
+    u8 *restrict g = dst, *restrict v = dst + 3 * (size_t)wp;
+    g[0] = g[w - 1] = v[0] = v[w - 1] = 15;
+    for (int x = 1; x < w - 1; x++) {
+        int sx = (r[x + 1] - r[x - 1]) * 2 + rn[x + 1] - rn[x - 1] + rs[x + 1] - rs[x - 1];
+        sx = sx < -15 ? -15 : (sx > 15 ? 15 : sx);
+        g[x] = (u8)(sx + 15);
+        v[x] = r[x];
+    }
+    for (int c = 0; c < 2; c++) {
+        const u8 *restrict val = dst + 3 * (size_t)c * wp;
+        u8 *restrict lo = dst + (3 * (size_t)c + 1) * wp, *restrict hi = lo + wp;
+        int u = val[0], ur = (u + val[1]) / 2; /* column 0: no left neighbour */
+        lo[0] = (u8)(ur < u ? ur : u);
+        hi[0] = (u8)(ur > u ? ur : u);
+        for (int x = 1; x < w - 1; x++) {
+            const int uu = val[x], ul = (uu + val[x - 1]) / 2, ur2 = (uu + val[x + 1]) / 2;
+            const int mn = ul < ur2 ? ul : ur2, mx = ul > ur2 ? ul : ur2;
+            lo[x] = (u8)(mn < uu ? mn : uu);
+            hi[x] = (u8)(mx > uu ? mx : uu);
+        }
+        u = val[w - 1]; /* column w - 1: no right neighbour */
+        const int ul = (u + val[w - 2]) / 2;
+        lo[w - 1] = (u8)(ul < u ? ul : u);
+        hi[w - 1] = (u8)(ul > u ? ul : u);
+    }
+    if (mirror) {
+        for (int q = 0; q < 6; q++) {
+            const u8 *restrict src = tmp + (size_t)q * wp;
+            u8 *restrict o = out + (size_t)q * wp;
+            for (int x = 0; x < w; x++) o[w - 1 - x] = src[x];
+        }
+    }
+}
+
+/* ---------------------------------------------------------------------------------------
+ * Birchfield-Tomasi pixel costs of the left column xl against its partners, all d, into
+ * px[0 .. ndp - 1] (uint8): with the right column xl - min_d - d,
  *   min(dist(g_l, [g_r-, g_r+]), dist(g_r, [g_l-, g_l+]))
  *     + (min(dist(i_l, [i_r-, i_r+]), dist(i_r, [i_l-, i_l+])) >> 2),
  * dist(u, [v0, v1]) = max(u, v0) - min(u, v1), exact in 8 bits (at most 30 + 63 = 93);
  * g the clipped Sobel channel, i the intensity, - and + their half-pixel minima and maxima.
- * The right row is mirrored: the partner of xl at disparity min_d + d is at base + d. The
- * loop runs to ndp (D rounded up to 64: whole vectors, no scalar tail); the costs past D
- * come from the channels' padding and are never read as costs (see _sgbm_c.c).
+ * r1: the left row's channels; G: the mirrored right row's at the partner of d = 0 (column
+ * w - 1 - xl + min_d), the others following at increasing addresses. The loop runs to ndp
+ * (D rounded up to 64: whole vectors, no scalar tail); the costs past D come from the
+ * channels' padding and are never read as costs.
  */
-KSTEP void K(pixel_costs)(const Job *J, int k, u8 *restrict p) {
+KINLINE void K(bt_costs)(const u8 *restrict r1, const u8 *restrict G, int wp, int xl,
+                         u8 *restrict px, int ndp) {
+    const u8 gu = r1[xl], gu0 = r1[wp + xl], gu1 = r1[2 * wp + xl];
+    const u8 iu = r1[3 * wp + xl], iu0 = r1[4 * wp + xl], iu1 = r1[5 * wp + xl];
+    const u8 *restrict Glo = G + wp, *restrict Ghi = G + 2 * wp;
+    const u8 *restrict I = G + 3 * wp, *restrict Ilo = G + 4 * wp, *restrict Ihi = G + 5 * wp;
+    for (int d = 0; d < ndp; d++) {
+        const u8 gv = G[d], iv = I[d];
+        const u8 a = (u8)((gu > Glo[d] ? gu : Glo[d]) - (gu < Ghi[d] ? gu : Ghi[d]));
+        const u8 b = (u8)((gv > gu0 ? gv : gu0) - (gv < gu1 ? gv : gu1));
+        const u8 c = (u8)((iu > Ilo[d] ? iu : Ilo[d]) - (iu < Ihi[d] ? iu : Ihi[d]));
+        const u8 e = (u8)((iv > iu0 ? iv : iu0) - (iv < iu1 ? iv : iu1));
+        px[d] = (u8)((a < b ? a : b) + ((c < e ? c : e) >> 2));
+    }
+}
+
+/* The pixel costs of one image row (its channels in W->c1, W->c2) for the w1 matched columns
+ * into p ([w1][ndp]). */
+KSTEP void K(pixel_costs)(const Job *J, const Work *W, u8 *restrict p) {
     const int wp = J->wp, ndp = J->ndp;
-    const u8 *r1 = J->ch1 + (size_t)k * 6 * wp, *r2 = J->ch2 + (size_t)k * 6 * wp;
     for (int x = 0; x < J->w1; x++) {
-        const int xl = J->min_x1 + x, base = J->w - 1 - xl + J->min_d;
-        const u8 gu = r1[xl], gu0 = r1[wp + xl], gu1 = r1[2 * wp + xl];
-        const u8 iu = r1[3 * wp + xl], iu0 = r1[4 * wp + xl], iu1 = r1[5 * wp + xl];
-        const u8 *restrict G = r2 + base, *restrict Glo = G + wp, *restrict Ghi = G + 2 * wp;
-        const u8 *restrict I = G + 3 * wp, *restrict Ilo = G + 4 * wp, *restrict Ihi = G + 5 * wp;
-        u8 *restrict px = p + (size_t)x * ndp;
-        for (int d = 0; d < ndp; d++) {
-            const u8 gv = G[d], iv = I[d];
-            const u8 a = (u8)((gu > Glo[d] ? gu : Glo[d]) - (gu < Ghi[d] ? gu : Ghi[d]));
-            const u8 b = (u8)((gv > gu0 ? gv : gu0) - (gv < gu1 ? gv : gu1));
-            const u8 c = (u8)((iu > Ilo[d] ? iu : Ilo[d]) - (iu < Ihi[d] ? iu : Ihi[d]));
-            const u8 e = (u8)((iv > iu0 ? iv : iu0) - (iv < iu1 ? iv : iu1));
-            px[d] = (u8)((a < b ? a : b) + ((c < e ? c : e) >> 2));
-        }
+        const int xl = J->min_x1 + x;
+        K(bt_costs)(W->c1, W->c2 + (J->w - 1 - xl + J->min_d), wp, xl, p + (size_t)x * ndp, ndp);
+    }
+}
+
+/* The same, and the block's column sums moved down a row at once: vs += p - psub (p the row
+ * entering the block, psub the one leaving it), while p's row is in the L1 cache. */
+KSTEP void K(pixel_costs_move)(const Job *J, const Work *W, u8 *restrict p,
+                               const u8 *restrict psub, i16 *restrict vs) {
+    const int wp = J->wp, ndp = J->ndp;
+    for (int x = 0; x < J->w1; x++) {
+        const int xl = J->min_x1 + x;
+        const size_t o = (size_t)x * ndp;
+        K(bt_costs)(W->c1, W->c2 + (J->w - 1 - xl + J->min_d), wp, xl, p + o, ndp);
+        u8 *restrict px = p + o;
+        const u8 *restrict ps = psub + o;
+        i16 *restrict v = vs + o;
+        for (int d = 0; d < ndp; d++) v[d] = (i16)(v[d] + px[d] - ps[d]);
     }
 }
 
@@ -215,6 +287,12 @@ KSTEP void K(backward)(const Job *J, Work *W, i16 *restrict row) {
     }
 }
 
+/* Both images' channels of row k into W->c1 (left) and W->c2 (right, mirrored). */
+KINLINE void K(row_channels)(const Job *J, Work *W, int k) {
+    K(channels_row)(J->img1, J->h, J->w, J->wp, k, W->c1, W->ctmp, 0);
+    K(channels_row)(J->img2, J->h, J->w, J->wp, k, W->c2, W->ctmp, 1);
+}
+
 /* ---------------------------------------------------------------------------------------
  * SGBM3WayMainLoop for stripe n: rows y0 (its overlap above it) .. y1. Only the rows OpenCV
  * keeps from this stripe (from n * stripe_sz on) get the backward pass and the left-right
@@ -247,20 +325,29 @@ KATTR static void K(stripe)(const Job *J, Work *W, int n) {
         if (y == y0) { /* rows y0 .. y0 + half, y0 counted half + 1 times */
             for (int k = y0; k <= y0 + half; k++) {
                 u8 *pk = W->ring + (size_t)((k < h ? k : h - 1) % hrows) * cells;
-                if (k < h) K(pixel_costs)(J, k, pk);
+                if (k < h) {
+                    K(row_channels)(J, W, k);
+                    K(pixel_costs)(J, W, pk);
+                }
                 K(vsum_add)(W->vsum, pk, k == y0 ? half + 1 : 1, cells);
             }
         } else {
             const int k = y + half, ks = y - half - 1 > y0 ? y - half - 1 : y0;
             u8 *pk = W->ring + (size_t)((k < h ? k : h - 1) % hrows) * cells;
-            if (k < h) K(pixel_costs)(J, k, pk);
-            K(vsum_move)(W->vsum, pk, W->ring + (size_t)(ks % hrows) * cells, cells);
+            const u8 *psub = W->ring + (size_t)(ks % hrows) * cells;
+            if (k < h) {
+                K(row_channels)(J, W, k);
+                K(pixel_costs_move)(J, W, pk, psub, W->vsum);
+            } else { /* below the image: its last row again (OpenCV reuses its costs) */
+                K(vsum_move)(W->vsum, pk, psub, cells);
+            }
         }
         K(forward)(J, W, cur);
         cur = 1 - cur;
         if (y < keep) continue;
         i16 *row = J->raw + (size_t)y * w;
         for (int x = 0; x < w; x++) {
+            row[x] = (i16)((J->min_d - 1) * 16); /* unknown until backward finds it */
             W->disp2[x] = (i16)((J->min_d - 1) * 16);
             W->disp2cost[x] = MAX_COST;
         }
@@ -270,3 +357,4 @@ KATTR static void K(stripe)(const Job *J, Work *W, int n) {
 }
 
 #undef KSTEP
+#undef KINLINE

@@ -31,6 +31,7 @@ __all__ = [
     "compiled_params",
     "dense_disparity",
     "opencv_sgbm",
+    "sgbm_kernel",
     "sgbm_map",
     "use_compiled",
 ]
@@ -75,7 +76,8 @@ SGBM_DISP12_MAX_DIFF = 1
 #: "1 or 2".
 SGBM_SPECKLE_WINDOW = 100
 SGBM_SPECKLE_RANGE = 2
-#: ``auto`` | ``opencv`` | ``numba``: which SGBM :func:`sgbm_map` runs (:func:`use_compiled`).
+#: ``auto`` | ``c`` | ``opencv`` | ``numba``: which SGBM :func:`sgbm_map` runs
+#: (:func:`sgbm_kernel`).
 SGBM_ENV = "SCENESPEAK_SGBM"
 #: Smallest cost volume (matched columns × disparities × rows) for which ``auto`` runs the
 #: compiled SGBM: measured faster at 1280×960 and 1920×1080 (Art: about 2·10⁸ and 6.5·10⁸
@@ -166,14 +168,16 @@ def sgbm_map(
     cl: NDArray[np.uint8], cr: NDArray[np.uint8], mn: int, num: int, bs: int, uniqueness: int
 ) -> NDArray[np.int16]:
     """OpenCV's 3-way StereoSGBM map of a gray pair with the stage's parameters (the
-    module's constants), from OpenCV or from the compiled copy of it, which gives the same
-    int16 map bit for bit (:mod:`~scenespeak.perception.stereo.sgbm`); :func:`use_compiled`
-    chooses."""
-    if use_compiled(cl.shape, mn, num, bs, uniqueness):
+    module's constants), from OpenCV or from one of the compiled copies of it (the C
+    extension or the Numba loops), which give the same int16 map bit for bit
+    (:mod:`~scenespeak.perception.stereo.sgbm`); :func:`sgbm_kernel` chooses."""
+    kernel = sgbm_kernel(cl.shape, mn, num, bs, uniqueness)
+    if kernel != "opencv":
         from scenespeak.perception.stereo import sgbm
 
         params = compiled_params(mn, num, bs, uniqueness)
-        return sgbm.sgbm3way(cl, cr, params, threads=max(1, cv2.getNumThreads()))
+        threads = max(1, cv2.getNumThreads())
+        return sgbm.sgbm3way(cl, cr, params, threads=threads, kernel=kernel)
     return np.asarray(opencv_sgbm(mn, num, bs, uniqueness).compute(cl, cr))
 
 
@@ -213,31 +217,56 @@ def compiled_params(mn: int, num: int, bs: int, uniqueness: int) -> SgbmParams:
 
 
 def use_compiled(shape: tuple[int, ...], mn: int, num: int, bs: int, uniqueness: int) -> bool:
-    """Whether :func:`sgbm_map` runs the compiled SGBM rather than OpenCV's.
+    """Whether :func:`sgbm_map` runs a compiled copy of the SGBM (the C extension or the
+    Numba loops) rather than OpenCV's: :func:`sgbm_kernel` is not ``"opencv"``."""
+    return sgbm_kernel(shape, mn, num, bs, uniqueness) != "opencv"
 
-    ``SCENESPEAK_SGBM`` (read at every call): ``opencv`` never; ``numba`` whenever the
-    compiled copy can compute the call (:func:`~scenespeak.perception.stereo.sgbm.supported`,
-    Numba installed); ``auto`` (default) only where it was measured to win: the call's cost
-    volume holds at least :data:`COMPILED_MIN_CELLS` cells **and** Numba is already loaded in
-    this process. Loading Numba costs a process 0.6-0.85 s of CPU (import 0.2-0.34 s, the
-    first compiled call 0.4-0.5 s; docs/calibration.md), more than the compiled SGBM saves on
-    one 1920×1080 pair (about 0.35 s), so ``auto`` never loads it for SGBM alone. The map is
-    the same either way, so the choice changes only the time. ``SCENESPEAK_NO_NUMBA=1`` means
-    ``opencv``.
+
+def sgbm_kernel(shape: tuple[int, ...], mn: int, num: int, bs: int, uniqueness: int) -> str:
+    """Which SGBM :func:`sgbm_map` runs: ``"c"``, ``"numba"`` or ``"opencv"``. The map is the
+    same bit for bit whichever runs, so the choice changes only the time.
+
+    ``SCENESPEAK_SGBM`` (read at every call):
+
+    * ``opencv``: OpenCV's;
+    * ``c``: the C extension (``_sgbm_c``, built at install time where a C compiler was
+      found) wherever it can compute the call
+      (:func:`~scenespeak.perception.stereo.sgbm.supported`), else OpenCV's;
+    * ``numba``: the Numba loops wherever they can (Numba installed), else OpenCV's;
+    * ``auto`` (default): the C extension where it is built and can compute the call (it
+      was measured cheaper than OpenCV's at 640×480, 1280×960 and 1920×1080 and loads in
+      about a millisecond; docs/calibration.md); without it, the Numba loops only for a cost
+      volume of at least :data:`COMPILED_MIN_CELLS` cells **and** only when Numba is already
+      loaded in this process (loading it costs a process 0.6-0.85 s of CPU, more than it
+      saves on one 1920×1080 pair), else OpenCV's.
+
+    ``SCENESPEAK_NO_NUMBA=1`` rules the Numba loops out.
+
+    >>> import os
+    >>> os.environ[SGBM_ENV] = "opencv"
+    >>> sgbm_kernel((480, 737), 26, 96, 3, 10)
+    'opencv'
+    >>> del os.environ[SGBM_ENV]
     """
     value = os.environ.get(SGBM_ENV, "auto").strip().lower()
-    if value not in ("auto", "opencv", "numba"):
-        raise ValueError(f"{SGBM_ENV}={value!r}: expected auto, opencv or numba")
-    if value == "opencv" or os.environ.get("SCENESPEAK_NO_NUMBA", "") not in ("", "0"):
-        return False
-    cells = max(0, shape[1] - max(mn + num, 0) + min(mn, 0)) * num * shape[0]
-    if value == "auto" and (cells < COMPILED_MIN_CELLS or "numba" not in sys.modules):
-        return False
-    # imported only now: a process that never runs the copy does not pay for the module
+    if value not in ("auto", "c", "opencv", "numba"):
+        raise ValueError(f"{SGBM_ENV}={value!r}: expected auto, c, opencv or numba")
+    if value == "opencv":
+        return "opencv"
+    # imported only now: a process that never runs a copy does not pay for the module
     from scenespeak.perception.stereo import sgbm
 
     p2 = SGBM_P2_PER_PIXEL * bs * bs
-    return sgbm.available() and sgbm.supported((shape[0], shape[1]), mn, num, bs, p2, uniqueness)
+    if not sgbm.supported((shape[0], shape[1]), mn, num, bs, p2, uniqueness):
+        return "opencv"
+    if value in ("auto", "c") and sgbm.c_available():
+        return "c"
+    if value == "c" or os.environ.get("SCENESPEAK_NO_NUMBA", "") not in ("", "0"):
+        return "opencv"
+    cells = max(0, shape[1] - max(mn + num, 0) + min(mn, 0)) * num * shape[0]
+    if value == "auto" and (cells < COMPILED_MIN_CELLS or "numba" not in sys.modules):
+        return "opencv"
+    return "numba" if sgbm.available() else "opencv"
 
 
 def _to_pixels(raw: NDArray[np.int16], mn: int, out: NDArray[np.float32]) -> None:
