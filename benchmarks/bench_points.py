@@ -62,7 +62,12 @@ from scenespeak.perception.features import detect, load_image, to_gray
 from scenespeak.perception.stage_options import StereoOptions
 from scenespeak.perception.stereo import dense, matching
 
-ART = Path(__file__).resolve().parents[1] / "../shared/data/real/stereo/middeval2/Art"
+#: the real data (``SCENESPEAK_REAL_DATA``, as the tests take it, or ``../shared/data/real``)
+REAL = Path(
+    os.environ.get("SCENESPEAK_REAL_DATA")
+    or Path(__file__).resolve().parents[1] / "../shared/data/real"
+)
+ART = REAL / "stereo/middeval2/Art"
 GOLDEN = Path(__file__).resolve().parent / "points_golden.json"
 
 

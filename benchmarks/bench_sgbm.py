@@ -1,4 +1,4 @@
-"""Benchmark of the compiled 3-way SGBM (``perception/stereo/sgbm.py``) against OpenCV's.
+"""Benchmark of the compiled 3-way SGBMs (``perception/stereo/sgbm.py``: C, Numba) against OpenCV's.
 
 For the real Art pair (or ``--pair LEFT RIGHT``) resized to 640×480, 1280×960 and 1920×1080
 (as ``bench_points.py`` resizes it), this finds the search range and the crop the stage's
@@ -7,12 +7,16 @@ in one run, median wall (process CPU) in ms:
 
 * ``cv2.StereoSGBM`` (3-way, the stage's parameters, ``compute``: map, median, speckles) with
   OpenCV's threads (``cv2.getNumThreads()``);
-* the compiled copy on as many threads (Numba; its cached kernels loaded before timing);
+* the C extension (``_sgbm_c``, the copy of its loops for this CPU: ``_sgbm_c.isa()``) on as
+  many threads, then OpenCV's median and speckle filters as ``compute`` ends with;
+* the Numba loops on as many threads (their cached kernels loaded before timing; left out
+  without Numba);
 
-and checks the two maps are identical, pixel for pixel. Also prints the cost volume's size
+and checks the maps are identical, pixel for pixel. Also prints the cost volume's size
 (matched columns × disparities × rows, what ``dense.COMPILED_MIN_CELLS`` is set against) and
-what loading Numba costs a fresh process (import, the first compiled call), measured in a
-subprocess.
+what loading each copy costs a fresh process (import of the C extension; import of Numba and
+the first compiled call), measured in subprocesses. The C column's ms per phase (its raw map
+on 1 thread and on the threads, the median, the speckle filter) follow each table.
 
 Run::
 
@@ -39,7 +43,21 @@ from scenespeak.perception.features import load_image, to_gray
 from scenespeak.perception.stage_options import StereoOptions
 from scenespeak.perception.stereo import dense, sgbm
 
-ART = Path(__file__).resolve().parents[1] / "../shared/data/real/stereo/middeval2/Art"
+#: the real data (``SCENESPEAK_REAL_DATA``, as the tests take it, or ``../shared/data/real``)
+REAL = Path(
+    os.environ.get("SCENESPEAK_REAL_DATA")
+    or Path(__file__).resolve().parents[1] / "../shared/data/real"
+)
+ART = REAL / "stereo/middeval2/Art"
+
+_LOAD_C = """
+import time
+import numpy as np
+t0, c0 = time.perf_counter(), time.process_time()
+from scenespeak.perception.stereo import _sgbm_c
+t1, c1 = time.perf_counter(), time.process_time()
+print(f"{t1 - t0:.4f} {c1 - c0:.4f}")
+"""
 
 _LOAD = """
 import time
@@ -85,6 +103,61 @@ def _size(text: str) -> tuple[int, int]:
     return int(w), int(h)
 
 
+def _load_costs(numba: bool) -> None:
+    """Print what loading each copy costs a fresh process (subprocesses)."""
+    run = [sys.executable, "-c"]
+    if sgbm.c_available():
+        cw, cc = (float(x) for x in subprocess.run(
+            [*run, _LOAD_C], capture_output=True, text=True, check=True
+        ).stdout.split())  # fmt: skip
+        print(f"a fresh process: import of the C extension {1000 * cw:.1f} ({1000 * cc:.1f}) ms")
+    if numba:
+        out = subprocess.run([*run, _LOAD], capture_output=True, text=True, check=True)
+        iw, ic, kw, kc = (float(x) for x in out.stdout.split())
+        print(
+            f"a fresh process: import numba {1000 * iw:.0f} ({1000 * ic:.0f}) ms, first "
+            f"compiled SGBM call (cached kernels) {1000 * kw:.0f} ({1000 * kc:.0f}) ms"
+        )
+
+
+def _c_phases(cl: Any, cr: Any, params: Any, threads: int, repeat: int) -> str:
+    """The C column's phases, median wall (CPU) ms: raw map on 1 thread and on ``threads``,
+    OpenCV's median and speckle filter on it."""
+    from scenespeak.perception.stereo import _sgbm_c
+
+    h, w = cl.shape
+    p = params
+    raw = np.empty((h, w), np.int16)
+
+    def kernel(t: int) -> Callable[[], object]:
+        return lambda: _sgbm_c.raw(
+            cl, cr, raw, h, w, p.min_disparity, p.num_disparities, p.block_size, p.p1, p.p2,
+            p.uniqueness, p.disp12_max_diff, sgbm.OPENCV_LANES, t,
+        )  # fmt: skip
+
+    kernel(threads)()
+    med = cv2.medianBlur(raw, 3)
+    inv, rng = (p.min_disparity - 1) * 16, 16 * p.speckle_range
+    phases: dict[str, Callable[[], object]] = {
+        "raw map, 1 thread": kernel(1),
+        f"raw map, {threads} threads": kernel(threads),
+        "medianBlur": lambda: cv2.medianBlur(raw, 3),
+        "filterSpeckles": lambda: cv2.filterSpeckles(med.copy(), inv, p.speckle_window, rng),
+    }
+    out = []
+    for name, fn in phases.items():
+        t = [timed(fn) for _ in range(repeat)]
+        wall, cpu = statistics.median(a for a, _ in t), statistics.median(b for _, b in t)
+        out.append(f"{name} {1000 * wall:.1f} ({1000 * cpu:.1f})")
+    return "C phases, ms: " + "; ".join(out)
+
+
+def _row(name: str, med: dict[str, tuple[float, float]]) -> str:
+    w, c = med[name]
+    ow, oc = med["OpenCV"]
+    return f"| {name} | {1000 * w:.0f} ({1000 * c:.0f}) | {ow / w:.2f} ({oc / c:.2f}) |"
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeat", type=int, default=7)
@@ -95,14 +168,12 @@ def main() -> None:
     args = parser.parse_args()
     paths = args.pair or (ART / "view1.png", ART / "view5.png")
     left0, right0 = (load_image(p, gray=False) for p in paths)
-    out = subprocess.run(
-        [sys.executable, "-c", _LOAD], capture_output=True, text=True, check=True
-    ).stdout.split()
-    iw, ic, kw, kc = (float(x) for x in out)
-    print(
-        f"a fresh process: import numba {1000 * iw:.0f} ({1000 * ic:.0f}) ms, first compiled "
-        f"SGBM call (cached kernels) {1000 * kw:.0f} ({1000 * kc:.0f}) ms"
-    )
+    kernels = [k for k, ok in (("C", sgbm.c_available()), ("Numba", sgbm.available())) if ok]
+    _load_costs("Numba" in kernels)
+    if "C" in kernels:
+        from scenespeak.perception.stereo import _sgbm_c
+
+        print(f"C loops for this CPU: copy {_sgbm_c.isa()} (2 x86-64-v4, 1 x86-64-v3, 0 base)")
     print(f"load average before: {' '.join(f'{x:.2f}' for x in os.getloadavg())}")
     threads = max(1, cv2.getNumThreads())
     bs = 3
@@ -116,15 +187,15 @@ def main() -> None:
         cells = max(0, w - max(mn + num, 0) + min(mn, 0)) * num * h
         matcher = dense.opencv_sgbm(mn, num, bs, 10)
         params = dense.compiled_params(mn, num, bs, 10)
-
-        def compiled(cl: Any = cl, cr: Any = cr, params: Any = params) -> Any:
-            return sgbm.sgbm3way(cl, cr, params, threads=threads)
-
         cases: dict[str, Callable[[], object]] = {
-            "OpenCV": lambda m=matcher, cl=cl, cr=cr: m.compute(cl, cr),
-            "compiled": compiled,
+            "OpenCV": lambda m=matcher, cl=cl, cr=cr: m.compute(cl, cr)
         }
-        same = bool(np.array_equal(matcher.compute(cl, cr), compiled()))
+        for k in kernels:
+            cases[k] = lambda cl=cl, cr=cr, p=params, k=k: sgbm.sgbm3way(
+                cl, cr, p, threads=threads, kernel=k.lower()
+            )
+        want = cases["OpenCV"]()
+        same = {k: bool(np.array_equal(want, cases[k]())) for k in kernels}
         times: dict[str, list[tuple[float, float]]] = {k: [] for k in cases}
         for _ in range(args.repeat):  # interleaved: they share the machine's load
             for k, fn in cases.items():
@@ -133,15 +204,19 @@ def main() -> None:
             k: (statistics.median(a for a, _ in t), statistics.median(b for _, b in t))
             for k, t in times.items()
         }
-        (ow, oc), (nw, nc) = med["OpenCV"], med["compiled"]
         print(
             f"\n{size[0]}×{size[1]}: minDisparity {mn}, numDisparities {num}, SGBM input "
-            f"{w}×{h}, {cells / 1e6:.0f}·10⁶ cells, {threads} threads; identical: {same}"
+            f"{w}×{h}, {cells / 1e6:.0f}·10⁶ cells, {threads} threads; identical to OpenCV's: "
+            + ", ".join(f"{k} {v}" for k, v in same.items())
         )
-        print("| SGBM | wall (CPU) ms |\n| --- | ---: |")
-        print(f"| OpenCV | {1000 * ow:.0f} ({1000 * oc:.0f}) |")
-        print(f"| compiled | {1000 * nw:.0f} ({1000 * nc:.0f}) |")
-        print(f"| OpenCV / compiled | {ow / nw:.2f} ({oc / nc:.2f}) |", flush=True)
+        print("| SGBM | wall (CPU) ms | OpenCV / this |\n| --- | ---: | ---: |")
+        for k in cases:
+            print(_row(k, med))
+        if "C" in kernels and "Numba" in kernels:
+            (nw, nc), (cw, cc) = med["Numba"], med["C"]
+            print(f"| Numba / C | | {nw / cw:.2f} ({nc / cc:.2f}) |")
+        if "C" in kernels:
+            print(_c_phases(cl, cr, params, threads, args.repeat), flush=True)
     print(f"\nload average after: {' '.join(f'{x:.2f}' for x in os.getloadavg())}")
 
 

@@ -30,7 +30,12 @@ from scenespeak.cli.points import _stereo_points
 from scenespeak.perception import calibration, stereo
 from scenespeak.perception.features import load_image
 
-ROOT = Path(__file__).resolve().parents[1] / "../shared/data/real/stereo"
+#: the real data (``SCENESPEAK_REAL_DATA``, as the tests take it, or ``../shared/data/real``)
+REAL = Path(
+    os.environ.get("SCENESPEAK_REAL_DATA")
+    or Path(__file__).resolve().parents[1] / "../shared/data/real"
+)
+ROOT = REAL / "stereo"
 GOLDEN = Path(__file__).resolve().parent / "points_golden.json"
 #: (left, right) file names of each set (the data README).
 LAYOUTS = (
