@@ -55,8 +55,8 @@ typedef struct {
     u8 *ring;      /* [hrows][w1][ndp]: the last rows' pixel costs */
     i16 *vsum;     /* [w1][ndp]: pixel costs summed over the block's rows */
     i16 *cvol;     /* [w1][nd]: block costs C (P2 + the block's pixel costs) */
-    i16 *top[2];   /* [w1][nd + 2]: the top path, padded at d = -1 and d = D; the previous
-                      row's and the one being made, in turn */
+    i16 *top;      /* [w1][nd + 2]: the top path, padded at d = -1 and d = D */
+    i16 *tmp;      /* [nd]: one column's new top path */
     i16 *top_min;  /* [w1]: its minima */
     i16 *lt;       /* [w1][nd]: left + top paths */
     i16 *left;     /* [2][nd + 2]: the left path, this column's and the previous one */
@@ -148,8 +148,8 @@ static void work_free(Work *W) {
     free(W->ring);
     free(W->vsum);
     free(W->cvol);
-    free(W->top[0]);
-    free(W->top[1]);
+    free(W->top);
+    free(W->tmp);
     free(W->top_min);
     free(W->lt);
     free(W->left);
@@ -170,8 +170,8 @@ static int work_alloc(const Job *J, Work *W) {
     W->ring = malloc((size_t)J->hrows * pcells);
     W->vsum = malloc(pcells * sizeof(i16));
     W->cvol = malloc(cells * sizeof(i16));
-    W->top[0] = malloc((size_t)J->w1 * (nd + 2) * sizeof(i16));
-    W->top[1] = malloc((size_t)J->w1 * (nd + 2) * sizeof(i16));
+    W->top = malloc((size_t)J->w1 * (nd + 2) * sizeof(i16));
+    W->tmp = malloc(nd * sizeof(i16));
     W->top_min = malloc((size_t)J->w1 * sizeof(i16));
     W->lt = malloc(cells * sizeof(i16));
     W->left = malloc(2 * (nd + 2) * sizeof(i16));
@@ -183,7 +183,7 @@ static int work_alloc(const Job *J, Work *W) {
     W->c1 = calloc(6 * (size_t)J->wp, 1);
     W->c2 = calloc(6 * (size_t)J->wp, 1);
     W->ctmp = calloc(6 * (size_t)J->wp, 1);
-    if (!W->ring || !W->vsum || !W->cvol || !W->top[0] || !W->top[1] || !W->top_min || !W->lt ||
+    if (!W->ring || !W->vsum || !W->cvol || !W->top || !W->tmp || !W->top_min || !W->lt ||
         !W->left || !W->right || !W->hs || !W->s || !W->disp2 || !W->disp2cost || !W->c1 ||
         !W->c2 || !W->ctmp) {
         work_free(W);

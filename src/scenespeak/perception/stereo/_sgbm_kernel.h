@@ -129,8 +129,8 @@ KSTEP void K(vsum_move)(i16 *restrict vs, const u8 *restrict padd, const u8 *res
  *  - the block cost C[d] = P2 + the horizontal box sum of vsum over columns x - half ..
  *    x + half (edge columns replicated, as OpenCV's getRawMatchingCost), kept as a running
  *    sum hs: hs += va - vb (va the column entering the box, vb the one leaving it);
- *  - the top path (from this column's previous row, Tp, into Tn) and the left path (from the
- *    previous column, Lp, into Ln), each in OpenCV's form of Hirschmueller's eq. 13:
+ *  - the top path (from this column's previous row, T, made in tmp, then copied into T) and
+ *    the left path (from the previous column, Lp, into Ln), each in OpenCV's form of Hirschmueller's eq. 13:
  *      L[d] = C[d] + min(min(prev[d-1], prev[d+1]) + P1, prev[d], min(prev) + P2)
  *             - (min(prev) + P2),
  *    over rows padded with SHRT_MAX - P1 at d = -1 and d = D (never chosen; + P1 never
@@ -139,7 +139,7 @@ KSTEP void K(vsum_move)(i16 *restrict vs, const u8 *restrict padd, const u8 *res
  * Returns the minima of the new top and left rows in mins[0], mins[1].
  */
 KSTEP void K(forward_column)(const i16 *restrict va, const i16 *restrict vb, i16 *restrict hs,
-                             i16 *restrict C, const i16 *restrict Tp, i16 *restrict Tn,
+                             i16 *restrict C, i16 *restrict T, i16 *restrict tmp,
                              const i16 *restrict Lp, i16 *restrict Ln, i16 *restrict LT,
                              const i16 *restrict pen, i16 *restrict mins, int nd) {
     const i16 P1 = pen[0], P2 = pen[1], tm = pen[2], lm = pen[3];
@@ -149,10 +149,10 @@ KSTEP void K(forward_column)(const i16 *restrict va, const i16 *restrict vb, i16
         hs[d] = hv;
         const i16 c = (i16)(hv + P2);
         C[d] = c;
-        const i16 ta = (i16)((Tp[d] < Tp[d + 2] ? Tp[d] : Tp[d + 2]) + P1);
-        const i16 tb = Tp[d + 1] < tm ? Tp[d + 1] : tm;
+        const i16 ta = (i16)((T[d] < T[d + 2] ? T[d] : T[d + 2]) + P1);
+        const i16 tb = T[d + 1] < tm ? T[d + 1] : tm;
         const i16 t = (i16)(c + (ta < tb ? ta : tb) - tm);
-        Tn[d + 1] = t;
+        tmp[d] = t;
         mt = t < mt ? t : mt;
         const i16 la = (i16)((Lp[d] < Lp[d + 2] ? Lp[d] : Lp[d + 2]) + P1);
         const i16 lb = Lp[d + 1] < lm ? Lp[d + 1] : lm;
@@ -161,6 +161,7 @@ KSTEP void K(forward_column)(const i16 *restrict va, const i16 *restrict vb, i16
         ml = v < ml ? v : ml;
         LT[d] = (i16)(v + t);
     }
+    for (int d = 0; d < nd; d++) T[d + 1] = tmp[d]; /* in place: one top path buffer */
     mins[0] = mt;
     mins[1] = ml;
 }
@@ -203,9 +204,9 @@ KSTEP int K(first_min)(const i16 *restrict s, i16 ms, i16 thresh, int nd, int *b
 
 /* ---------------------------------------------------------------------------------------
  * The forward pass of one row, left to right: forward_column for each column (block costs
- * kept in cvol, the top path from top[cur] into top[1 - cur], left + top in lt).
+ * kept in cvol, the top path updated in top, left + top in lt).
  */
-KSTEP void K(forward)(const Job *J, Work *W, int cur) {
+KSTEP void K(forward)(const Job *J, Work *W) {
     const int nd = J->nd, ndp = J->ndp, w1 = J->w1, half = J->half, np2 = nd + 2;
     i16 *restrict hs = W->hs;
     const i16 *vs = W->vsum;
@@ -218,15 +219,14 @@ KSTEP void K(forward)(const Job *J, Work *W, int cur) {
     for (int d = 1; d <= nd; d++) W->left[d] = 0;
     i16 pen[4] = {(i16)J->p1, (i16)J->p2, 0, (i16)J->p2}, mins[2];
     int lc = 0;
-    const i16 *Tp = W->top[cur];
-    i16 *Tn = W->top[1 - cur];
+    i16 *T = W->top;
     for (int x = 0; x < w1; x++) {
         /* the column entering the box and the one leaving it (the same at x = 0: no change) */
         const int ja = x == 0 ? 0 : (x + half < w1 - 1 ? x + half : w1 - 1);
         const int js = x - half - 1 > 0 ? x - half - 1 : 0;
         pen[2] = (i16)(W->top_min[x] + J->p2);
         K(forward_column)(vs + (size_t)ja * ndp, vs + (size_t)js * ndp, hs,
-                          W->cvol + (size_t)x * nd, Tp + (size_t)x * np2, Tn + (size_t)x * np2,
+                          W->cvol + (size_t)x * nd, T + (size_t)x * np2, W->tmp,
                           W->left + (size_t)lc * np2, W->left + (size_t)(1 - lc) * np2,
                           W->lt + (size_t)x * nd, pen, mins, nd);
         W->top_min[x] = mins[0];
@@ -310,17 +310,14 @@ KATTR static void K(stripe)(const Job *J, Work *W, int n) {
     memset(W->vsum, 0, cells * sizeof(i16));
     memset(W->top_min, 0, (size_t)J->w1 * sizeof(i16));
     for (int x = 0; x < J->w1; x++) {
-        for (int t = 0; t < 2; t++) {
-            i16 *T = W->top[t] + (size_t)x * (nd + 2);
-            memset(T + 1, 0, (size_t)nd * sizeof(i16));
-            T[0] = T[nd + 1] = edge;
-        }
+        i16 *T = W->top + (size_t)x * (nd + 2);
+        memset(T + 1, 0, (size_t)nd * sizeof(i16));
+        T[0] = T[nd + 1] = edge;
     }
     for (int i = 0; i < 2; i++) {
         W->left[i * (nd + 2)] = W->left[i * (nd + 2) + nd + 1] = edge;
         W->right[i * (nd + 2)] = W->right[i * (nd + 2) + nd + 1] = edge;
     }
-    int cur = 0; /* top[cur] holds the previous row's top path */
     for (int y = y0; y < y1; y++) {
         if (y == y0) { /* rows y0 .. y0 + half, y0 counted half + 1 times */
             for (int k = y0; k <= y0 + half; k++) {
@@ -342,8 +339,7 @@ KATTR static void K(stripe)(const Job *J, Work *W, int n) {
                 K(vsum_move)(W->vsum, pk, psub, cells);
             }
         }
-        K(forward)(J, W, cur);
-        cur = 1 - cur;
+        K(forward)(J, W);
         if (y < keep) continue;
         i16 *row = J->raw + (size_t)y * w;
         for (int x = 0; x < w; x++) {
