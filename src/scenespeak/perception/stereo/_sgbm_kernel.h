@@ -138,7 +138,7 @@ KSTEP void K(vsum_move)(i16 *restrict vs, const u8 *restrict padd, const u8 *res
  *  - LT[d] = left + top, for the backward pass.
  * Returns the minima of the new top and left rows in mins[0], mins[1].
  */
-KSTEP void K(forward_column)(const i16 *restrict va, const i16 *restrict vb, i16 *restrict hs,
+KINLINE void K(forward_column)(const i16 *restrict va, const i16 *restrict vb, i16 *restrict hs,
                              i16 *restrict C, i16 *restrict T, i16 *restrict tmp,
                              const i16 *restrict Lp, i16 *restrict Ln, i16 *restrict LT,
                              const i16 *restrict pen, i16 *restrict mins, int nd) {
@@ -169,7 +169,7 @@ KSTEP void K(forward_column)(const i16 *restrict va, const i16 *restrict vb, i16
 /* One column of the backward pass: the right path (from column x + 1, Rp, into Rn; eq. 13 as
  * above, rm = min(Rp) + P2) and the sum of the three paths s = LT + right. Returns
  * min(right) in mins[0] and min(s) in mins[1]. */
-KSTEP void K(backward_column)(const i16 *restrict C, const i16 *restrict LT,
+KINLINE void K(backward_column)(const i16 *restrict C, const i16 *restrict LT,
                               const i16 *restrict Rp, i16 *restrict Rn, i16 *restrict s,
                               const i16 *restrict pen, i16 *restrict mins, int nd) {
     const i16 P1 = pen[0], rm = pen[1];
@@ -191,7 +191,7 @@ KSTEP void K(backward_column)(const i16 *restrict C, const i16 *restrict LT,
 /* The choice among the summed costs s of one pixel, whose minimum is ms: the first d with
  * s[d] == ms (the smallest of "d where ms is reached, else D"), and how many d cost less
  * than the uniqueness threshold (s[d] < thresh), both in one pass. */
-KSTEP int K(first_min)(const i16 *restrict s, i16 ms, i16 thresh, int nd, int *below) {
+KINLINE int K(first_min)(const i16 *restrict s, i16 ms, i16 thresh, int nd, int *below) {
     i16 first = (i16)nd, n = 0;
     for (int d = 0; d < nd; d++) {
         const i16 dd = s[d] == ms ? (i16)d : (i16)nd;
