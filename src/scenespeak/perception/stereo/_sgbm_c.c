@@ -61,7 +61,7 @@ typedef struct {
     i16 *lt;       /* [w1][nd]: left + top paths */
     i16 *left;     /* [2][nd + 2]: the left path, this column's and the previous one */
     i16 *right;    /* [2][nd + 2]: the right path, likewise */
-    i16 *hs;       /* [nd]: the running horizontal box sum of vsum */
+    i16 *hs;       /* [nd]: the block costs of column 0 */
     i16 *s;        /* [nd]: one pixel's summed costs */
     i16 *disp2;    /* [w]: the reverse map of one row */
     i16 *disp2cost; /* [w]: its costs */

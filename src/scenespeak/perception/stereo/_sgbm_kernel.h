@@ -127,8 +127,9 @@ KSTEP void K(vsum_move)(i16 *restrict vs, const u8 *restrict padd, const u8 *res
 /* ---------------------------------------------------------------------------------------
  * One column x of the forward pass, all d at once:
  *  - the block cost C[d] = P2 + the horizontal box sum of vsum over columns x - half ..
- *    x + half (edge columns replicated, as OpenCV's getRawMatchingCost), kept as a running
- *    sum hs: hs += va - vb (va the column entering the box, vb the one leaving it);
+ *    x + half (edge columns replicated, as OpenCV's getRawMatchingCost), as a running sum:
+ *    C = Cprev + va - vb (Cprev the previous column's, va the column entering the box, vb
+ *    the one leaving it);
  *  - the top path (from this column's previous row, T, made in tmp, then copied into T) and
  *    the left path (from the previous column, Lp, into Ln), each in OpenCV's form of Hirschmueller's eq. 13:
  *      L[d] = C[d] + min(min(prev[d-1], prev[d+1]) + P1, prev[d], min(prev) + P2)
@@ -138,16 +139,15 @@ KSTEP void K(vsum_move)(i16 *restrict vs, const u8 *restrict padd, const u8 *res
  *  - LT[d] = left + top, for the backward pass.
  * Returns the minima of the new top and left rows in mins[0], mins[1].
  */
-KINLINE void K(forward_column)(const i16 *restrict va, const i16 *restrict vb, i16 *restrict hs,
+KINLINE void K(forward_column)(const i16 *restrict va, const i16 *restrict vb,
+                               const i16 *restrict Cprev,
                              i16 *restrict C, i16 *restrict T, i16 *restrict tmp,
                              const i16 *restrict Lp, i16 *restrict Ln, i16 *restrict LT,
                              const i16 *restrict pen, i16 *restrict mins, int nd) {
-    const i16 P1 = pen[0], P2 = pen[1], tm = pen[2], lm = pen[3];
+    const i16 P1 = pen[0], tm = pen[2], lm = pen[3];
     i16 mt = MAX_COST, ml = MAX_COST;
     for (int d = 0; d < nd; d++) {
-        const i16 hv = (i16)(hs[d] + va[d] - vb[d]);
-        hs[d] = hv;
-        const i16 c = (i16)(hv + P2);
+        const i16 c = (i16)(Cprev[d] + va[d] - vb[d]);
         C[d] = c;
         const i16 ta = (i16)((T[d] < T[d + 2] ? T[d] : T[d + 2]) + P1);
         const i16 tb = T[d + 1] < tm ? T[d + 1] : tm;
@@ -210,8 +210,9 @@ KSTEP void K(forward)(const Job *J, Work *W) {
     const int nd = J->nd, ndp = J->ndp, w1 = J->w1, half = J->half, np2 = nd + 2;
     i16 *restrict hs = W->hs;
     const i16 *vs = W->vsum;
-    /* the box sum at column 0: column 0 counted half + 1 times, then columns 1 .. half */
-    for (int d = 0; d < nd; d++) hs[d] = (i16)(vs[d] * (half + 1));
+    /* the block cost at column 0: P2 + column 0 counted half + 1 times, then columns
+     * 1 .. half */
+    for (int d = 0; d < nd; d++) hs[d] = (i16)(vs[d] * (half + 1) + J->p2);
     for (int j = 1; j <= half; j++) {
         const i16 *vj = vs + (size_t)(j < w1 ? j : w1 - 1) * ndp;
         for (int d = 0; d < nd; d++) hs[d] = (i16)(hs[d] + vj[d]);
@@ -225,7 +226,8 @@ KSTEP void K(forward)(const Job *J, Work *W) {
         const int ja = x == 0 ? 0 : (x + half < w1 - 1 ? x + half : w1 - 1);
         const int js = x - half - 1 > 0 ? x - half - 1 : 0;
         pen[2] = (i16)(W->top_min[x] + J->p2);
-        K(forward_column)(vs + (size_t)ja * ndp, vs + (size_t)js * ndp, hs,
+        K(forward_column)(vs + (size_t)ja * ndp, vs + (size_t)js * ndp,
+                          x == 0 ? hs : W->cvol + (size_t)(x - 1) * nd,
                           W->cvol + (size_t)x * nd, T + (size_t)x * np2, W->tmp,
                           W->left + (size_t)lc * np2, W->left + (size_t)(1 - lc) * np2,
                           W->lt + (size_t)x * nd, pen, mins, nd);
