@@ -1,4 +1,4 @@
-"""OpenCV's StereoSGBM (3-way mode) again, compiled with Numba: the same map, bit for bit.
+"""OpenCV's StereoSGBM (3-way mode) again, compiled (C or Numba): the same map, bit for bit.
 
 :func:`sgbm3way` gives what ``cv2.StereoSGBM_create(..., mode=STEREO_SGBM_MODE_SGBM_3WAY)
 .compute(left, right)`` gives for one gray pair (Hirschmüller 2008, "Stereo Processing by
@@ -10,14 +10,17 @@ left-right check; ``modules/stereo/src/stereosgbm.cpp``):
   reproducible", whatever ``cv2.getNumThreads()``), each with ``blockSize // 2 + 1 +
   ceil(0.1 · stripe)`` rows of overlap above it, run here on up to ``threads`` threads (the
   compiled loops release the GIL);
-* the same int16 arithmetic in the same order (costs, paths, sums; the sub-pixel parabola;
+* the same int16 integers (costs, paths, sums; the sub-pixel parabola;
   ties between equal summed costs broken as OpenCV's 8-lane vector loop breaks them, see
   :data:`OPENCV_LANES`);
 * then OpenCV's own ``medianBlur`` (3×3) and ``filterSpeckles``, the two steps ``compute``
   ends with.
 
-Where it is used, and why only there: :func:`scenespeak.perception.stereo.dense.use_compiled`
-(docs/calibration.md, "The dense map without OpenCV's SGBM").
+Two kernels compute the raw map (``kernel=``): ``_sgbm_c`` (``_sgbm_c.c``, an ahead-of-time
+C extension that ``setup.py`` builds where a C compiler is found: loads in milliseconds) and
+``_sgbm3way`` (Numba loops, the readable reference; loading Numba costs a process 0.6-0.85 s).
+Which one the dense stage runs: :func:`scenespeak.perception.stereo.dense.sgbm_kernel`
+(docs/calibration.md, "The dense map without OpenCV's SGBM" and "The dense map in C").
 """
 
 from __future__ import annotations
