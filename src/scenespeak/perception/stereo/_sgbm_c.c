@@ -103,11 +103,14 @@ static void lr_check(const Job *J, const Work *W, i16 *row) {
 /* The hot loops, once per instruction set (see _sgbm_kernel.h). */
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
 #define HAVE_X86_COPIES 1
+#include <immintrin.h> /* the v4 copy's first_min uses AVX-512BW mask compares */
+#define K_AVX512 1
 #define KATTR __attribute__((target("arch=x86-64-v4")))
 #define K(name) name##_v4
 #include "_sgbm_kernel.h"
 #undef KATTR
 #undef K
+#undef K_AVX512
 #define KATTR __attribute__((target("arch=x86-64-v3")))
 #define K(name) name##_v3
 #include "_sgbm_kernel.h"

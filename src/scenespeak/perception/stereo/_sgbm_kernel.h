@@ -189,8 +189,26 @@ KINLINE void K(backward_column)(const i16 *restrict C, const i16 *restrict LT,
 }
 
 /* The choice among the summed costs s of one pixel, whose minimum is ms: the first d with
- * s[d] == ms (the smallest of "d where ms is reached, else D"), and how many d cost less
- * than the uniqueness threshold (s[d] < thresh), both in one pass. */
+ * s[d] == ms, and how many d cost less than the uniqueness threshold (s[d] < thresh), both
+ * in one pass. */
+#ifdef K_AVX512
+/* With AVX-512BW: the comparisons give bit masks, so the first d is a count of trailing
+ * zeros and the count a popcount (no reductions across the vector); the tail is masked. */
+KINLINE int K(first_min)(const i16 *restrict s, i16 ms, i16 thresh, int nd, int *below) {
+    const __m512i vm = _mm512_set1_epi16(ms), vt = _mm512_set1_epi16(thresh);
+    int first = -1, n = 0;
+    for (int d = 0; d < nd; d += 32) {
+        const __mmask32 m = nd - d >= 32 ? 0xFFFFFFFFu : ((__mmask32)1 << (nd - d)) - 1;
+        const __m512i v = _mm512_maskz_loadu_epi16(m, s + d);
+        const __mmask32 e = _mm512_mask_cmpeq_epi16_mask(m, v, vm);
+        n += __builtin_popcount(_mm512_mask_cmplt_epi16_mask(m, v, vt));
+        if (first < 0 && e) first = d + __builtin_ctz(e);
+    }
+    *below = n;
+    return first;
+}
+#else
+/* The smallest of "d where ms is reached, else D", and the count, as plain loops. */
 KINLINE int K(first_min)(const i16 *restrict s, i16 ms, i16 thresh, int nd, int *below) {
     i16 first = (i16)nd, n = 0;
     for (int d = 0; d < nd; d++) {
@@ -201,6 +219,7 @@ KINLINE int K(first_min)(const i16 *restrict s, i16 ms, i16 thresh, int nd, int 
     *below = n;
     return first;
 }
+#endif
 
 /* ---------------------------------------------------------------------------------------
  * The forward pass of one row, left to right: forward_column for each column (block costs
