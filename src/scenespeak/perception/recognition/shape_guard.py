@@ -14,10 +14,19 @@ completes it with the support plane: each of the segment's points is also droppe
 plane (its foot, ``p − (p·n − level) n``), and the box round the points and their feet, in
 the image, is the silhouette the object has down to the floor it stands on. A name whose
 learnt views are all more than ``factor`` flatter or taller than that silhouette is refused.
+
+The bound is two-sided (issue 10, session 9): a segment far *flatter* than the name's flattest
+view (under ``low`` times it) is not that object either — a 6.5 cm bottle 22 cm tall stands
+3.4 times as tall as wide in every view, and a 10 cm soup tin beside it 1.4. Labels whose
+views the segment does not fit are no *competitors* of a cue's name either
+(:meth:`ShapeGuard.allowed`): on a tall, narrow grey segment a flat postcard or a short soup
+tin whose grey levels look alike is not a rival to the bottle. The cues' lead and margin are
+then measured against the learnt objects the segment could be.
 """
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
@@ -63,12 +72,43 @@ class ShapeGuard:
     normal, level
         The support plane (``p·normal = level``; ``normal`` is up).
     factor : float
-        The silhouette's height / width must lie within this factor of a view's.
+        1.3 — the standing proportion may be at most this many times the flattest view's.
+    low : float
+        0.6 — ... and at least this share of it (right colour and grey names on the tuning
+        sets and the cylinder stress set: 0.66–1.08; 0 turns the lower bound off).
     """
 
     normal: NDArray[np.float64]
     level: float
     factor: float = 1.3
+    low: float = 0.6
+
+    def proportion(self, xyz: NDArray[np.floating]) -> float:
+        """:func:`standing_proportion` of ``xyz`` on this guard's plane."""
+        return standing_proportion(xyz, self.normal, self.level)
+
+    def fits(self, proportion: float, views: NDArray[np.floating] | None) -> bool:
+        """Whether a segment of standing ``proportion`` may be an object whose views' aspects
+        are ``views`` (True when either is unknown).
+
+        >>> g = ShapeGuard(np.array([0.0, -1.0, 0.0]), 0.0)
+        >>> [g.fits(p, np.array([3.4, 3.5])) for p in (1.4, 3.0, 5.0)]
+        [False, True, False]
+        """
+        v = np.asarray(views if views is not None else (), np.float64)
+        v = v[v > 0]
+        if not len(v) or not proportion > 0:
+            return True
+        least = float(v.min())
+        return self.low * least <= proportion <= self.factor * least
+
+    def allowed(
+        self, xyz: NDArray[np.floating], views: Mapping[str, NDArray[np.floating] | None]
+    ) -> frozenset[str]:
+        """The labels (keys of ``views``: each label's views' aspects) that the points
+        ``xyz`` standing on the plane may be (:meth:`fits`)."""
+        a = self.proportion(xyz)
+        return frozenset(lab for lab, v in views.items() if self.fits(a, v))
 
     def refuses(self, xyz: NDArray[np.floating], views: NDArray[np.floating]) -> str | None:
         """Why points ``xyz`` cannot be an object whose views' aspects are ``views`` (None:
@@ -76,12 +116,15 @@ class ShapeGuard:
         v = np.asarray(views, np.float64)
         v = v[v > 0]
         a = standing_proportion(xyz, self.normal, self.level)
-        if not len(v) or not a > 0:
+        if self.fits(a, v):
             return None
-        f, least = self.factor, float(v.min())
-        if a <= f * least:
-            return None
+        least = float(v.min())
+        if a > self.factor * least:
+            return (
+                f"it stands {a:.2f} times as tall as long on the support plane, more than "
+                f"{self.factor:g} times its flattest view ({least:.2f})"
+            )
         return (
-            f"it stands {a:.2f} times as tall as long on the support plane, more than {f:g} "
-            f"times its flattest view ({least:.2f})"
+            f"it stands {a:.2f} times as tall as long on the support plane, less than "
+            f"{self.low:g} times its flattest view ({least:.2f})"
         )
