@@ -20,8 +20,11 @@ view (under ``low`` times it) is not that object either — a 6.5 cm bottle 22 c
 3.4 times as tall as wide in every view, and a 10 cm soup tin beside it 1.4. Labels whose
 views the segment does not fit are no *competitors* of a cue's name either
 (:meth:`ShapeGuard.allowed`): on a tall, narrow grey segment a flat postcard or a short soup
-tin whose grey levels look alike is not a rival to the bottle. The cues' lead and margin are
-then measured against the learnt objects the segment could be.
+tin whose grey levels look alike is not a rival to the bottle. A rival is ruled out only when
+the segment fits none of its views, its tallest included (a cube-shaped segment still has the
+flat crate, whose side view is 0.78, as a rival: ruled out by its flattest view, 0.48, the
+crate let a never-learnt grey cube be named "postcard" in a leave-half-out run). The cues'
+lead and margin are then measured against the learnt objects the segment could be.
 """
 
 from __future__ import annotations
@@ -102,13 +105,30 @@ class ShapeGuard:
         least = float(v.min())
         return self.low * least <= proportion <= self.factor * least
 
+    def could_be(self, proportion: float, views: NDArray[np.floating] | None) -> bool:
+        """Whether a segment of standing ``proportion`` could be an object whose views'
+        aspects are ``views`` *seen from any of them*: at most ``factor`` times its tallest
+        view and at least ``low`` times its flattest (True when either is unknown). Looser
+        than :meth:`fits`: a label ruled out here is no rival to another name at all.
+
+        >>> g = ShapeGuard(np.array([0.0, -1.0, 0.0]), 0.0)
+        >>> crate = np.array([0.48, 0.78])  # a flat crate's front and side views
+        >>> g.fits(0.75, crate), g.could_be(0.75, crate), g.could_be(1.4, crate)
+        (False, True, False)
+        """
+        v = np.asarray(views if views is not None else (), np.float64)
+        v = v[v > 0]
+        if not len(v) or not proportion > 0:
+            return True
+        return self.low * float(v.min()) <= proportion <= self.factor * float(v.max())
+
     def allowed(
         self, xyz: NDArray[np.floating], views: Mapping[str, NDArray[np.floating] | None]
     ) -> frozenset[str]:
         """The labels (keys of ``views``: each label's views' aspects) that the points
-        ``xyz`` standing on the plane may be (:meth:`fits`)."""
+        ``xyz`` standing on the plane could be (:meth:`could_be`): the rivals of a cue's name."""
         a = self.proportion(xyz)
-        return frozenset(lab for lab, v in views.items() if self.fits(a, v))
+        return frozenset(lab for lab, v in views.items() if self.could_be(a, v))
 
     def refuses(self, xyz: NDArray[np.floating], views: NDArray[np.floating]) -> str | None:
         """Why points ``xyz`` cannot be an object whose views' aspects are ``views`` (None:
