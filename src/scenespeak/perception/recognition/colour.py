@@ -384,15 +384,26 @@ def name_unknown_objects(
         if refused is not None:
             out[i] = refused
             continue
-        base = obj
-        if remake is not None:
-            made = make_object(label, obj.xyz[keep], remake[0], source="segment", options=remake[1])
-            if isinstance(made, SceneObject):
-                base = made
-        out[i] = dataclasses.replace(
-            base, label=label, name=label, confidence=0.5, notes=(*base.notes, note)
-        )
+        out[i] = _renamed(obj, named, remake)
     return tuple(_renumbered(out))
+
+
+def _renamed(
+    obj: SceneObject,
+    named: tuple[str, str, NDArray[np.intp]],
+    remake: tuple[NDArray[np.float64], ObjectOptions] | None,
+) -> SceneObject:
+    """``obj`` named ``named = (label, note, points to keep)``, made again of those points
+    with ``remake`` (``name_unknown_objects``)."""
+    label, note, keep = named
+    base = obj
+    if remake is not None:
+        made = make_object(label, obj.xyz[keep], remake[0], source="segment", options=remake[1])
+        if isinstance(made, SceneObject):
+            base = made
+    return dataclasses.replace(
+        base, label=label, name=label, confidence=0.5, notes=(*base.notes, note)
+    )
 
 
 def _shape_refusal(obj: SceneObject, scene: _Scene) -> SceneObject | None:
