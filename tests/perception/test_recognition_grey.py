@@ -221,3 +221,31 @@ def test_grey_signatures_stored_and_version_2_files_upgraded(tmp_path: Path) -> 
         version = conn.execute("SELECT value FROM meta WHERE key = 'schema_version'").fetchone()
     conn.close()
     assert version == ("3",)
+
+
+def test_only_the_labels_a_segment_could_be_compete_for_its_name() -> None:
+    """Issue 10, session 9: a tall narrow grey cylinder (a 6.5 x 22 cm bottle) whose grey
+    texture looks about as much like a short soup tin's as like its own views. The cue's lead
+    is measured against the objects the segment's standing shape allows: the squat soup (views
+    1.5 times as tall as wide; the segment stands 3 times as tall as wide) is no rival."""
+    image = _scene()  # a star-field texture, 60 x 40 px at 1 m
+    seg = _patch_object((100, 20, 128, 120), 1.0)  # 28 x 100 px: 5.6 x 20 cm, on the floor y = 0
+    image[20:120, 100:128] = _stars(100, 28, seed=11)[..., None]
+    tall = np.array([3.4], np.float32)
+    models = {
+        **MODELS,
+        "bottle": dataclasses.replace(MODELS["soup"], grey_aspects=tall),
+        "soup": dataclasses.replace(MODELS["soup"], greys=MODELS["soup"].greys * 1.0),
+    }
+    guard = ShapeGuard(UP, 0.0)
+    # the bottle and the soup are equally near by grey levels: without shapes, no lead
+    assert name_unknown([seg], image, K, models)[0].label == "unknown object 1"
+    # standing 3 times as tall as wide on the floor, the segment can only be the bottle
+    (named,) = name_unknown([seg], image, K, models, shape=guard)
+    assert named.label == "bottle"
+    # the guard's lower bound: a squat soup-shaped segment (standing 1.5 times as tall as
+    # wide) is not the bottle, whose every view is 3.4 times as tall as wide
+    squat = _patch_object((100, 60, 140, 120), 1.0)
+    why = guard.refuses(squat.xyz, tall)
+    assert why is not None and "less than 0.6 times its flattest view (3.40)" in why
+    assert guard.refuses(seg.xyz, tall) is None

@@ -33,7 +33,7 @@ images) are never named this way.
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Collection, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -227,11 +227,14 @@ def name_by_colour(
     aspect: float,
     models: Mapping[str, ColourModel],
     options: ColourOptions | None = None,
+    allowed: Collection[str] | None = None,
 ) -> tuple[str, float, float] | None:
     """The label whose colours and proportions alone fit, as ``(label, d1, d2)``, or None.
 
     ``d1`` is the distance to the label's nearest view, ``d2`` to any other object's (the
-    rules are in the module docstring).
+    rules are in the module docstring). With ``allowed`` (the labels whose shape the segment
+    fits, :meth:`~scenespeak.perception.recognition.shape_guard.ShapeGuard.allowed`), only
+    those are named and only those compete.
 
     Examples
     --------
@@ -257,6 +260,7 @@ def name_by_colour(
         parts, shares = _chroma(m.signatures)
         specific = float(shares.mean()) >= o.model_chroma
         specific &= float(parts.max(axis=-1).mean()) <= o.max_bin
+        specific &= allowed is None or lab in allowed
         near[lab] = float(hellinger(query, parts).min()) if specific else 1.0
     ranked = sorted(near.items(), key=lambda kv: kv[1])
     (label, d1), (_, d2) = ranked[0], ranked[1]
@@ -364,28 +368,53 @@ def name_unknown_objects(
     grey = o.grey
     if not models or img.ndim != 3 or img.shape[2] < 3 or img.dtype != np.uint8:
         return tuple(objects)
-    scene = _Scene(img[..., :3], np.asarray(camera, np.float64), models, o, grey)
+    scene = _Scene(img[..., :3], np.asarray(camera, np.float64), models, o, grey, shape)
     out = list(objects)
     for i, obj in enumerate(out):
         if not obj.label.startswith("unknown object"):
             continue
         named = _name_one(obj, scene)
-        if named is None or (named[1].startswith(_GREY_NOTE) and _piece_of(obj, named[0], out)):
+        if named is None:
+            out[i] = _shape_refusal(obj, scene) or obj
+            continue
+        if named[1].startswith(_GREY_NOTE) and _piece_of(obj, named[0], out):
             continue
         label, note, keep = named
         refused = _vetoed(obj, label, note, veto) or _misshapen(obj, keep, label, models, shape)
         if refused is not None:
             out[i] = refused
             continue
-        base = obj
-        if remake is not None:
-            made = make_object(label, obj.xyz[keep], remake[0], source="segment", options=remake[1])
-            if isinstance(made, SceneObject):
-                base = made
-        out[i] = dataclasses.replace(
-            base, label=label, name=label, confidence=0.5, notes=(*base.notes, note)
-        )
+        out[i] = _renamed(obj, named, remake)
     return tuple(_renumbered(out))
+
+
+def _renamed(
+    obj: SceneObject,
+    named: tuple[str, str, NDArray[np.intp]],
+    remake: tuple[NDArray[np.float64], ObjectOptions] | None,
+) -> SceneObject:
+    """``obj`` named ``named = (label, note, points to keep)``, made again of those points
+    with ``remake`` (``name_unknown_objects``)."""
+    label, note, keep = named
+    base = obj
+    if remake is not None:
+        made = make_object(label, obj.xyz[keep], remake[0], source="segment", options=remake[1])
+        if isinstance(made, SceneObject):
+            base = made
+    return dataclasses.replace(
+        base, label=label, name=label, confidence=0.5, notes=(*base.notes, note)
+    )
+
+
+def _shape_refusal(obj: SceneObject, scene: _Scene) -> SceneObject | None:
+    """``obj`` with a note saying why, when the cues would have named it without shapes and
+    the guard refuses that name (None otherwise): the note says what the shapes ruled out."""
+    if scene.guard is None:
+        return None
+    plain = _name_one(obj, dataclasses.replace(scene, guard=None))
+    if plain is None:
+        return None
+    return _misshapen(obj, plain[2], plain[0], scene.models, scene.guard)
 
 
 def _vetoed(
@@ -433,7 +462,18 @@ class _Scene:
     models: Mapping[str, ColourModel]
     colour: ColourOptions
     grey: GreyOptions | None
+    guard: ShapeGuard | None = None
     _gray: NDArray[np.uint8] | None = None
+
+    def allowed(self, xyz: NDArray[np.floating]) -> frozenset[str] | None:
+        """The labels whose views' shape the points ``xyz`` fit (None: no guard, all may)."""
+        if self.guard is None:
+            return None
+        views = {
+            lab: m.grey_aspects if m.grey_aspects is not None else m.aspects
+            for lab, m in self.models.items()
+        }
+        return self.guard.allowed(xyz, views)
 
     def gray(self) -> NDArray[np.uint8]:
         if self._gray is None:
@@ -455,26 +495,30 @@ def _name_one(obj: SceneObject, scene: _Scene) -> tuple[str, str, NDArray[np.int
     rgb, uv, idx = _object_pixels(obj, scene.rgb, scene.camera)
     chroma = chromatic_pixels(rgb)
     if int(chroma.sum()) >= o.min_pixels:
-        named = name_by_colour(colour_signature(rgb), _box_aspect(uv[chroma]), scene.models, o)
+        keep = idx[_in_colour_box(uv, chroma)]
+        allowed = scene.allowed(np.asarray(obj.xyz)[keep])
+        sig = colour_signature(rgb)
+        named = name_by_colour(sig, _box_aspect(uv[chroma]), scene.models, o, allowed)
         if named is not None:
             label, d1, d2 = named
             note = f"named by colour and shape (distance {d1:.2f}, next object {d2:.2f})"
-            return label, note, idx[_in_colour_box(uv, chroma)]
+            return label, note, keep
     g = scene.grey
     if g is None or not len(rgb) or float(chroma.mean()) >= g.min_chroma:
         return None
-    return _name_grey((uv.astype(np.intp), chroma), idx, scene, g)
+    return _name_grey((uv.astype(np.intp), chroma), (np.asarray(obj.xyz), idx), scene, g)
 
 
 def _name_grey(
     pixels: tuple[NDArray[np.intp], NDArray[np.bool_]],
-    idx: NDArray[np.intp],
+    points: tuple[NDArray[np.float64], NDArray[np.intp]],
     scene: _Scene,
     g: GreyOptions,
 ) -> tuple[str, str, NDArray[np.intp]] | None:
     """An unknown grey object named by grey levels, texture and shape (its pixels ``uv`` and
-    which are chromatic, its points ``idx``), or None."""
+    which are chromatic, its points ``xyz`` and which of them the pixels are), or None."""
     uv, chroma = pixels
+    xyz, idx = points
     models = scene.grey_models(g.model_chroma)
     if len(models) < 2:
         return None
@@ -489,7 +533,8 @@ def _name_grey(
         return None
     u, s = uv[own], strength[own]
     sig = grey_signature(gray[u[:, 1], u[:, 0]], s, chroma[own])
-    named = name_by_grey(sig, _box_aspect(u.astype(np.float64)), models, g)
+    allowed = scene.allowed(xyz[idx[own]])
+    named = name_by_grey(sig, _box_aspect(u.astype(np.float64)), models, g, allowed)
     if named is None:
         return None
     label, d1, d2 = named

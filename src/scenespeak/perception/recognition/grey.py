@@ -39,7 +39,7 @@ out.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Collection, Mapping
 from dataclasses import dataclass
 
 import cv2
@@ -226,9 +226,12 @@ def name_by_grey(
     aspect: float,
     models: Mapping[str, tuple[NDArray[np.float32], NDArray[np.float32], bool]],
     options: GreyOptions | None = None,
+    allowed: Collection[str] | None = None,
 ) -> tuple[str, float, float] | None:
     """The grey label whose grey levels, texture and proportions alone fit, as
-    ``(label, d1, d2)``, or None (the rules are in the module docstring).
+    ``(label, d1, d2)``, or None (the rules are in the module docstring). With ``allowed``
+    (the labels whose shape the segment fits: :meth:`~scenespeak.perception.recognition.
+    shape_guard.ShapeGuard.allowed`), only those are named and only those compete.
 
     ``models`` maps a label to its views' grey signatures ``(V, GREY_BINS)``, their box
     aspects ``(V,)`` and whether the object is grey.
@@ -250,7 +253,10 @@ def name_by_grey(
     o = options or GreyOptions()
     if len(models) < 2 or not aspect > 0:
         return None
-    near = {lab: float(hellinger(signature, m[0]).min()) for lab, m in models.items()}
+    near = {
+        lab: float(hellinger(signature, m[0]).min()) if allowed is None or lab in allowed else 1.0
+        for lab, m in models.items()
+    }
     ranked = sorted(near.items(), key=lambda kv: kv[1])
     (label, d1), (_, d2) = ranked[0], ranked[1]
     if not models[label][2] or d1 > o.max_distance or d2 < o.lead * d1 or d2 - d1 < o.margin:

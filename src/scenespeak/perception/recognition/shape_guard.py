@@ -14,10 +14,24 @@ completes it with the support plane: each of the segment's points is also droppe
 plane (its foot, ``p − (p·n − level) n``), and the box round the points and their feet, in
 the image, is the silhouette the object has down to the floor it stands on. A name whose
 learnt views are all more than ``factor`` flatter or taller than that silhouette is refused.
+
+The bound is two-sided (issue 10, session 9): a segment far *flatter* than the name's flattest
+view (under ``low`` times it) is not that object either — a 6.5 cm bottle 22 cm tall stands
+3.4 times as tall as wide in every view, and a 10 cm soup tin beside it 1.4. Labels whose
+views the segment does not fit are no *competitors* of a cue's name either
+(:meth:`ShapeGuard.allowed`): on a tall, narrow grey segment a flat postcard or a short soup
+tin whose grey levels look alike is not a rival to the bottle. A rival is ruled out only when
+the segment fits none of its views, its tallest included (a cube-shaped segment still has the
+flat crate, whose side view is 0.78, as a rival: ruled out by its flattest view, 0.48, the
+crate let a never-learnt grey cube be named "postcard" in a leave-half-out run), and never
+because the segment is too *flat* for it (flat never-learnt boxes then lost the taller grey
+cylinders as rivals and came out "cube" in leave-half-out runs of the cylinder stress set). The
+cues' lead and margin are then measured against the learnt objects the segment could be.
 """
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 import numpy as np
@@ -63,12 +77,63 @@ class ShapeGuard:
     normal, level
         The support plane (``p·normal = level``; ``normal`` is up).
     factor : float
-        The silhouette's height / width must lie within this factor of a view's.
+        1.3 — the standing proportion may be at most this many times the flattest view's.
+    low : float
+        0.6 — ... and at least this share of it (right colour and grey names on the tuning
+        sets and the cylinder stress set: 0.66–1.08; 0 turns the lower bound off).
     """
 
     normal: NDArray[np.float64]
     level: float
     factor: float = 1.3
+    low: float = 0.6
+
+    def proportion(self, xyz: NDArray[np.floating]) -> float:
+        """:func:`standing_proportion` of ``xyz`` on this guard's plane."""
+        return standing_proportion(xyz, self.normal, self.level)
+
+    def fits(self, proportion: float, views: NDArray[np.floating] | None) -> bool:
+        """Whether a segment of standing ``proportion`` may be an object whose views' aspects
+        are ``views`` (True when either is unknown).
+
+        >>> g = ShapeGuard(np.array([0.0, -1.0, 0.0]), 0.0)
+        >>> [g.fits(p, np.array([3.4, 3.5])) for p in (1.4, 3.0, 5.0)]
+        [False, True, False]
+        """
+        v = np.asarray(views if views is not None else (), np.float64)
+        v = v[v > 0]
+        if not len(v) or not proportion > 0:
+            return True
+        least = float(v.min())
+        return self.low * least <= proportion <= self.factor * least
+
+    def could_be(self, proportion: float, views: NDArray[np.floating] | None) -> bool:
+        """Whether a segment of standing ``proportion`` could be an object whose views'
+        aspects are ``views``, as far as a *rival* goes: at most ``factor`` times its tallest
+        view (True when either is unknown). Only a segment too tall for every view rules a
+        rival out: a flatter one is what a floor smeared into the segment, a merged neighbour
+        or a dark top left out of it make of any object.
+
+        >>> g = ShapeGuard(np.array([0.0, -1.0, 0.0]), 0.0)
+        >>> crate = np.array([0.48, 0.78])  # a flat crate's front and side views
+        >>> g.fits(0.75, crate), g.could_be(0.75, crate), g.could_be(1.4, crate)
+        (False, True, False)
+        >>> g.could_be(0.3, crate)  # far flatter: still a rival
+        True
+        """
+        v = np.asarray(views if views is not None else (), np.float64)
+        v = v[v > 0]
+        if not len(v) or not proportion > 0:
+            return True
+        return proportion <= self.factor * float(v.max())
+
+    def allowed(
+        self, xyz: NDArray[np.floating], views: Mapping[str, NDArray[np.floating] | None]
+    ) -> frozenset[str]:
+        """The labels (keys of ``views``: each label's views' aspects) that the points
+        ``xyz`` standing on the plane could be (:meth:`could_be`): the rivals of a cue's name."""
+        a = self.proportion(xyz)
+        return frozenset(lab for lab, v in views.items() if self.could_be(a, v))
 
     def refuses(self, xyz: NDArray[np.floating], views: NDArray[np.floating]) -> str | None:
         """Why points ``xyz`` cannot be an object whose views' aspects are ``views`` (None:
@@ -76,12 +141,15 @@ class ShapeGuard:
         v = np.asarray(views, np.float64)
         v = v[v > 0]
         a = standing_proportion(xyz, self.normal, self.level)
-        if not len(v) or not a > 0:
+        if self.fits(a, v):
             return None
-        f, least = self.factor, float(v.min())
-        if a <= f * least:
-            return None
+        least = float(v.min())
+        if a > self.factor * least:
+            return (
+                f"it stands {a:.2f} times as tall as long on the support plane, more than "
+                f"{self.factor:g} times its flattest view ({least:.2f})"
+            )
         return (
-            f"it stands {a:.2f} times as tall as long on the support plane, more than {f:g} "
-            f"times its flattest view ({least:.2f})"
+            f"it stands {a:.2f} times as tall as long on the support plane, less than "
+            f"{self.low:g} times its flattest view ({least:.2f})"
         )

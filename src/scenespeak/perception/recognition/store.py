@@ -42,7 +42,7 @@ from scenespeak.perception.recognition.schema import (
     _now,
     migrate,
 )
-from scenespeak.perception.recognition.views import ImageLike, MaskLike, _extract_view, _ViewData
+from scenespeak.perception.recognition.views import ImageLike, MaskLike, _ViewData, extract_views
 from scenespeak.safeio import as_path
 
 __all__ = ["ObjectDatabase"]
@@ -282,6 +282,7 @@ class ObjectDatabase:
         max_features: int = 0,
         contrast_threshold: float = 0.02,
         progress: Progress | None = None,
+        raise_cylinders: bool = False,
     ) -> ObjectInfo:
         """Learn an object from training images and store it, in one transaction.
 
@@ -308,6 +309,10 @@ class ObjectDatabase:
         progress : callable, optional
             Called as ``progress(stage, done, total)`` with stage ``"extract"`` (per image,
             before anything is written) and ``"store"`` (per view written).
+        raise_cylinders : bool
+            False — True: a cylinder also gets views synthesised from 18 and 32 degrees higher
+            (:mod:`~scenespeak.perception.recognition.cylinder_views`; measured, not on by
+            default: ``docs/database.md``, session 9).
 
         Returns
         -------
@@ -332,11 +337,9 @@ class ObjectDatabase:
         mask_list = self._one_mask_per_image(label, images, masks)
         if not replace and label in self:
             raise DatabaseError(self.path, _duplicate(label))
-        views: list[_ViewData] = []
-        for i, (img, msk) in enumerate(zip(images, mask_list, strict=True)):
-            views.append(_extract_view(img, msk, i, max_features, contrast_threshold))
-            if progress is not None:
-                progress("extract", i + 1, len(images))
+        done = None if progress is None else functools.partial(progress, "extract")
+        sift = (max_features, contrast_threshold)
+        views = extract_views(images, mask_list, sift, done, raise_cylinders=raise_cylinders)
         with self._transaction() as conn:
             self._delete(conn, label, missing_ok=replace)
             now = _now()

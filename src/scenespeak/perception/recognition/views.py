@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from os import PathLike
 
@@ -154,6 +155,57 @@ def _read_mask(item: MaskLike, i: int, shape: tuple[int, ...]) -> NDArray[np.boo
     if not m.any():
         raise ImageError(name, "the mask is empty (no object pixels)")
     return m
+
+
+def extract_views(
+    images: Sequence[ImageLike],
+    masks: Sequence[MaskLike],
+    sift: tuple[int, float],
+    progress: Callable[[int, int], object] | None = None,
+    *,
+    raise_cylinders: bool = False,
+) -> list[_ViewData]:
+    """Each training image's view (its features inside its mask, outline and signatures) with
+    ``sift = (max_features, contrast_threshold)``; ``progress(done, total)`` after each; with
+    ``raise_cylinders``, :func:`raised_views` after them."""
+    out = []
+    for i, (img, msk) in enumerate(zip(images, masks, strict=True)):
+        out.append(_extract_view(img, msk, i, *sift))
+        if progress is not None:
+            progress(i + 1, len(images))
+    if raise_cylinders:
+        out += raised_views(images, masks, *sift)
+    return out
+
+
+def raised_views(
+    images: Sequence[ImageLike],
+    masks: Sequence[MaskLike],
+    max_features: int,
+    contrast_threshold: float,
+) -> list[_ViewData]:
+    """Views of a cylinder from higher up (:mod:`~scenespeak.perception.recognition.
+    cylinder_views`), synthesised from the masked training views, as extra views with their
+    own features and outlines (no colour or grey signature: the cues keep the real views'); []
+    for an object that is not a cylinder or has no masks."""
+    from scenespeak.perception.recognition.cylinder_views import elevated_views
+
+    grays, ms = [], []
+    for i, (img, msk) in enumerate(zip(images, masks, strict=True)):
+        gray = _read_image(img, i)
+        grays.append(gray)
+        ms.append(_read_mask(msk, i, gray.shape))
+    out = []
+    for i, raise_deg, view, vmask in elevated_views(grays, ms):
+        feats = detect(
+            view, mask=vmask, max_features=max_features, contrast_threshold=contrast_threshold
+        )
+        if len(feats) == 0:
+            continue
+        h, w = view.shape[:2]
+        source = f"{_source_name(images[i], i, 'image')} seen {raise_deg:g} degrees higher"
+        out.append(_ViewData(source, w, h, True, feats, outline_from_mask(vmask)))
+    return out
 
 
 def _extract_view(

@@ -1,0 +1,56 @@
+"""Views of a cylinder from higher up, synthesised at ``db add`` (recognition/cylinder_views.py).
+
+Opt-in (``add_object(..., raise_cylinders=True)``): measured on the cylinder stress set of
+docs/evaluation.md ("Session 9") and not on by default. The training views are rendered by the
+generator (its can and book, five yaws, with masks).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from scenespeak.perception.features import load_image
+from scenespeak.perception.recognition import ObjectDatabase
+from scenespeak.perception.recognition.cylinder_views import cylinder_of, elevated_views
+
+pytestmark = pytest.mark.slow  # renders ten training views (~5 s idle)
+
+YAWS = (0.0, 72.0, 144.0, -144.0, -72.0)
+
+
+def _views(tmp_path: Path, label: str) -> tuple[list[Path], list[np.ndarray]]:
+    scenes = pytest.importorskip("scenespeak.tools.scenes")
+    from scenespeak.tools.scene_model import CATALOGUE
+
+    obj = {o.label: o for o in CATALOGUE}[label]
+    paths = scenes.render_training_views(obj, tmp_path / label, yaws=YAWS, masks=True)
+    masks = [load_image(p.with_name(p.stem + "_mask.png"), gray=True) > 0 for p in paths]
+    return paths, masks
+
+
+def test_a_cylinder_is_seen_from_higher_up_and_a_box_is_not(tmp_path: Path) -> None:
+    cans, can_masks = _views(tmp_path, "can")
+    books, book_masks = _views(tmp_path, "book")
+    cyls = [cylinder_of(m) for m in can_masks]
+    assert all(c is not None for c in cyls)
+    widths = [c.r for c in cyls if c is not None]
+    assert max(widths) / min(widths) < 1.05  # the same silhouette from every side
+    grays = [load_image(p, gray=True) for p in cans]
+    raised = elevated_views(grays, can_masks)
+    assert sorted({d for _, d, _, _ in raised}) == [18.0, 32.0] and len(raised) == 10
+    # seen from higher up, the rims bulge more and the body is shorter
+    i, _d, _view, mask = min(raised, key=lambda r: r[1])  # 18 degrees higher
+    before, after = cyls[i], cylinder_of(mask)
+    assert before is not None and after is not None
+    assert after.sin_bottom > before.sin_bottom + 0.2
+    assert after.bottom - after.top < before.bottom - before.top
+    # a box's faces have straight bottom edges, and its width changes with the side it shows
+    assert elevated_views([load_image(p, gray=True) for p in books], book_masks) == []
+    with ObjectDatabase.create(tmp_path / "objects.db") as db:
+        plain = db.add_object("can", cans, masks=can_masks)
+        more = db.add_object("can 2", cans, masks=can_masks, raise_cylinders=True)
+        book = db.add_object("book", books, masks=book_masks, raise_cylinders=True)
+    assert (plain.views, more.views, book.views) == (5, 15, 5)
