@@ -200,7 +200,5 @@ def test_inliers_in_one_patch_of_the_region_do_not_name_it(side: float, named: b
     assert (out[0].label == "cat") is named
     if not named:
         assert "a patch of it" in out[0].notes[-1]
-    off = closer_look(
-        [_unknown(40, 60, 120, 140)], img, K, look, CloserOptions(min_cover=0.0)
-    )
+    off = closer_look([_unknown(40, 60, 120, 140)], img, K, look, CloserOptions(min_cover=0.0))
     assert off[0].label == "cat"  # without the rule the patch names it

@@ -373,7 +373,11 @@ def name_unknown_objects(
         if named is None or (named[1].startswith(_GREY_NOTE) and _piece_of(obj, named[0], out)):
             continue
         label, note, keep = named
-        refused = _vetoed(obj, label, note, veto) or _misshapen(obj, keep, label, models, shape)
+        refused = (
+            _vetoed(obj, label, note, veto)
+            or _unlike_verified(obj, label, note, out, scene)
+            or _misshapen(obj, keep, label, models, shape)
+        )
         if refused is not None:
             out[i] = refused
             continue
@@ -402,6 +406,70 @@ def _vetoed(
     if why is None:
         return None
     return dataclasses.replace(obj, notes=(*obj.notes, f"not named {label}: {why}"))
+
+
+#: Notes of names given without a geometric check (by colour, grey levels or keypoint votes):
+#: an object with none of them was verified by its keypoints (a detection, the closer look).
+_UNVERIFIED_NOTES = ("named by colour", _GREY_NOTE, "keypoint votes")
+
+
+def keypoint_verified(obj: SceneObject) -> bool:
+    """Whether ``obj`` is a known object whose name a geometric check of its keypoints gave
+    (a detection or the closer look), not colour, grey levels or keypoint votes alone."""
+    if obj.label.startswith("unknown object"):
+        return False
+    return not any(m in n for n in obj.notes for m in _UNVERIFIED_NOTES)
+
+
+def _unlike_verified(
+    obj: SceneObject, label: str, note: str, objects: Sequence[SceneObject], scene: _Scene
+) -> SceneObject | None:
+    """``obj`` still unknown with a note saying why, when ``label`` already has an instance
+    verified by its keypoints in this scene and ``obj``'s colours (or grey levels, for a name
+    by grey levels) are farther from that instance's pixels than the cue's ``max_distance``;
+    None when it may be named.
+
+    A name by colour or grey levels compares a segment with the training views; a second
+    instance is a copy of an object that is *in this scene*, in its light and at its scale,
+    so its appearance is that instance's. A never-learnt object that is as near the training
+    views as the cue allows may still be far from the object beside it (the distance is a
+    metric: both within 0.3 of the views, up to 0.6 from each other).
+    """
+    verified = [o for o in objects if o is not obj and o.label == label and keypoint_verified(o)]
+    if not verified:
+        return None
+    grey = note.startswith(_GREY_NOTE)
+    mine = _appearance(obj, scene, grey)
+    theirs = [a for o in verified if (a := _appearance(o, scene, grey)) is not None]
+    if mine is None or not theirs:
+        return None
+    d = min(float(hellinger(mine, t)) for t in theirs)
+    limit = scene.colour.max_distance
+    if grey and scene.grey is not None:
+        limit = scene.grey.max_distance
+    if d <= limit:
+        return None
+    what = "grey levels" if grey else "colours"
+    why = (
+        f"not named {label}: its {what} are {d:.2f} from those of the {label} verified by its "
+        f"keypoints in this scene (> {limit:g}): not another {label}"
+    )
+    return dataclasses.replace(obj, notes=(*obj.notes, why))
+
+
+def _appearance(obj: SceneObject, scene: _Scene, grey: bool) -> NDArray[np.float64] | None:
+    """The signature the colour cue (chromatic part, renormalised) or the grey cue (without
+    the floor-like pixels) compares for ``obj``'s pixels; None when it has too few."""
+    rgb, uv, _idx = _object_pixels(obj, scene.rgb, scene.camera)
+    chroma = chromatic_pixels(rgb)
+    if not grey:
+        if int(chroma.sum()) < scene.colour.min_pixels:
+            return None
+        return np.asarray(_chroma(colour_signature(rgb))[0], np.float64)
+    if scene.grey is None or not len(rgb):
+        return None
+    got = _grey_pixels((uv.astype(np.intp), chroma), scene, scene.grey)
+    return None if got is None else np.asarray(got[0], np.float64)
 
 
 def _misshapen(
@@ -474,10 +542,28 @@ def _name_grey(
 ) -> tuple[str, str, NDArray[np.intp]] | None:
     """An unknown grey object named by grey levels, texture and shape (its pixels ``uv`` and
     which are chromatic, its points ``idx``), or None."""
-    uv, chroma = pixels
     models = scene.grey_models(g.model_chroma)
     if len(models) < 2:
         return None
+    got = _grey_pixels(pixels, scene, g)
+    if got is None:
+        return None
+    sig, u, own = got
+    named = name_by_grey(sig, _box_aspect(u.astype(np.float64)), models, g)
+    if named is None:
+        return None
+    label, d1, d2 = named
+    note = f"{_GREY_NOTE} (distance {d1:.2f}, next object {d2:.2f})"
+    return label, note, idx[own]
+
+
+def _grey_pixels(
+    pixels: tuple[NDArray[np.intp], NDArray[np.bool_]], scene: _Scene, g: GreyOptions
+) -> tuple[NDArray[np.float32], NDArray[np.intp], NDArray[np.bool_]] | None:
+    """The grey signature of an object's pixels ``uv`` (which are chromatic: ``chroma``)
+    without the floor-like ones, those pixels, and which of ``uv`` they are; None when fewer
+    than ``g.min_pixels`` are left."""
+    uv, chroma = pixels
     gray = scene.gray()
     lo = np.maximum(uv.min(axis=0) - 1, 0)
     hi = uv.max(axis=0) + 2
@@ -488,13 +574,7 @@ def _name_grey(
     if int(own.sum()) < g.min_pixels:
         return None
     u, s = uv[own], strength[own]
-    sig = grey_signature(gray[u[:, 1], u[:, 0]], s, chroma[own])
-    named = name_by_grey(sig, _box_aspect(u.astype(np.float64)), models, g)
-    if named is None:
-        return None
-    label, d1, d2 = named
-    note = f"{_GREY_NOTE} (distance {d1:.2f}, next object {d2:.2f})"
-    return label, note, idx[own]
+    return grey_signature(gray[u[:, 1], u[:, 0]], s, chroma[own]), u, own
 
 
 def _renumbered(objects: list[SceneObject]) -> list[SceneObject]:
