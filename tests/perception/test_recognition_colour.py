@@ -177,7 +177,7 @@ def test_another_instance_by_colour_must_look_like_the_one_its_keypoints_verifie
     """The cup is verified by its keypoints in the scene (no cue's note). An unknown object
     whose colours fit the cup's training views (orange and green, half and half) is a second
     cup only if it also looks like that cup: beside a verified cup that is all orange but
-    for a sliver of green (Hellinger 0.39 from it, > max_distance 0.3) it stays unknown, with
+    for a sliver of green (Hellinger 0.39 from it, > max_distance 0.22) it stays unknown, with
     the reason; beside one of the same colours it is "cup 2"."""
     image = np.zeros((240, 320, 3), np.uint8)
     image[:] = FLOOR
@@ -199,3 +199,18 @@ def test_another_instance_by_colour_must_look_like_the_one_its_keypoints_verifie
     assert alone[0].label == "cup"
     by_colour = dataclasses.replace(cup, notes=("named by colour and shape (distance 0.1)",))
     assert name_unknown_objects([by_colour, unknown], image, K, MODELS)[1].label == "cup"
+
+
+def test_colours_only_near_the_views_name_nothing() -> None:
+    """Orange and green 85 / 15 against the cup's half and half: Hellinger 0.27, as near as the
+    never-learnt books named "can" on the default set's leave-half-out split (0.23-0.27; every
+    right colour naming of the session-9 runs 0.21 or nearer): not named with ``max_distance``
+    0.22, named with the old 0.3."""
+    from scenespeak.perception.recognition.colour import ColourOptions
+
+    sig = colour_signature(np.r_[_pixels(ORANGE, n=85), _pixels(GREEN, n=15)])
+    assert name_by_colour(sig, 1.2, MODELS) is None
+    old = name_by_colour(sig, 1.2, MODELS, ColourOptions(max_distance=0.3))
+    assert old is not None and old[0] == "cup" and 0.22 < old[1] < 0.3
+    near = colour_signature(np.r_[_pixels(ORANGE, n=65), _pixels(GREEN, n=35)])
+    assert name_by_colour(near, 1.2, MODELS)[0] == "cup"  # type: ignore[index]
