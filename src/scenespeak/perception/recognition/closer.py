@@ -238,6 +238,29 @@ def _budgeted(hulls: dict[int, NDArray[np.float64]], limit: float) -> list[int]:
     return sorted(out)
 
 
+def _verdict(
+    found: tuple[Detection, Features] | str | None,
+    obj: SceneObject,
+    objects: Sequence[SceneObject],
+    veto: Callable[[SceneObject, str], str | None] | None,
+) -> tuple[Detection, Features] | SceneObject:
+    """What :meth:`_Look.best` found, when it may name ``obj``; else ``obj`` as it is, with
+    a note when the look was refused (the look's own reason, or the veto's). A piece of an
+    object of that label (:func:`~scenespeak.perception.recognition.colour._piece_of`) stays
+    as it is."""
+    if found is None:
+        return obj
+    if isinstance(found, str):
+        return dataclasses.replace(obj, notes=(*obj.notes, found))
+    label = found[0].label
+    if _piece_of(obj, label, objects):
+        return obj
+    why = veto(obj, label) if veto is not None else None
+    if why is not None:
+        return dataclasses.replace(obj, notes=(*obj.notes, f"not named {label}: {why}"))
+    return found
+
+
 def closer_look(
     objects: Sequence[SceneObject],
     image: NDArray[np.generic],
@@ -287,20 +310,12 @@ def closer_look(
     out = list(objects)
     changed = False
     for i in _budgeted(hulls, o.budget * shape[0] * shape[1]):
-        found = scene.best(hulls[i])
-        if found is None:
-            continue
         obj = out[i]
-        if isinstance(found, str):
-            out[i] = dataclasses.replace(obj, notes=(*obj.notes, found))
+        found = _verdict(scene.best(hulls[i]), obj, out, veto)
+        if not isinstance(found, tuple):
+            out[i] = found
             continue
         det, feats = found
-        if _piece_of(obj, det.label, out):
-            continue
-        why = veto(obj, det.label) if veto is not None else None
-        if why is not None:
-            out[i] = dataclasses.replace(obj, notes=(*obj.notes, f"not named {det.label}: {why}"))
-            continue
         distinct = int(np.unique(np.rint(feats.xy[det.inliers]), axis=0).shape[0])
         cover = coverage(feats.xy[det.inliers], hulls[i])
         note = (

@@ -379,11 +379,7 @@ def name_unknown_objects(
         if named is None or (named[1].startswith(_GREY_NOTE) and _piece_of(obj, named[0], out)):
             continue
         label, note, keep = named
-        refused = (
-            _vetoed(obj, label, note, veto)
-            or _unlike_verified(obj, label, note, out, scene)
-            or _misshapen(obj, keep, label, models, shape)
-        )
+        refused = _refused(obj, named, out, scene, (veto, shape))
         if refused is not None:
             out[i] = refused
             continue
@@ -396,6 +392,27 @@ def name_unknown_objects(
             base, label=label, name=label, confidence=0.5, notes=(*base.notes, note)
         )
     return tuple(_renumbered(out))
+
+
+def _refused(
+    obj: SceneObject,
+    named: tuple[str, str, NDArray[np.intp]],
+    objects: Sequence[SceneObject],
+    scene: _Scene,
+    guards: tuple[Callable[[SceneObject, str], str | None] | None, ShapeGuard | None],
+) -> SceneObject | None:
+    """``obj`` still unknown with the reason when the keypoints' veto, a verified instance
+    of the label that it does not look like, or the shape guard refuses the cue's name
+    ``named`` (label, note, points kept); None when it may be named."""
+    from scenespeak.perception.recognition.instance_look import unlike_verified
+
+    label, note, keep = named
+    veto, shape = guards
+    return (
+        _vetoed(obj, label, note, veto)
+        or unlike_verified(obj, label, note, objects, scene)
+        or _misshapen(obj, keep, label, scene.models, shape)
+    )
 
 
 def _vetoed(
@@ -412,70 +429,6 @@ def _vetoed(
     if why is None:
         return None
     return dataclasses.replace(obj, notes=(*obj.notes, f"not named {label}: {why}"))
-
-
-#: Notes of names given without a geometric check (by colour, grey levels or keypoint votes):
-#: an object with none of them was verified by its keypoints (a detection, the closer look).
-_UNVERIFIED_NOTES = ("named by colour", _GREY_NOTE, "keypoint votes")
-
-
-def keypoint_verified(obj: SceneObject) -> bool:
-    """Whether ``obj`` is a known object whose name a geometric check of its keypoints gave
-    (a detection or the closer look), not colour, grey levels or keypoint votes alone."""
-    if obj.label.startswith("unknown object"):
-        return False
-    return not any(m in n for n in obj.notes for m in _UNVERIFIED_NOTES)
-
-
-def _unlike_verified(
-    obj: SceneObject, label: str, note: str, objects: Sequence[SceneObject], scene: _Scene
-) -> SceneObject | None:
-    """``obj`` still unknown with a note saying why, when ``label`` already has an instance
-    verified by its keypoints in this scene and ``obj``'s colours (or grey levels, for a name
-    by grey levels) are farther from that instance's pixels than the cue's ``max_distance``;
-    None when it may be named.
-
-    A name by colour or grey levels compares a segment with the training views; a second
-    instance is a copy of an object that is *in this scene*, in its light and at its scale,
-    so its appearance is that instance's. A never-learnt object that is as near the training
-    views as the cue allows may still be far from the object beside it (the distance is a
-    metric: both within 0.3 of the views, up to 0.6 from each other).
-    """
-    verified = [o for o in objects if o is not obj and o.label == label and keypoint_verified(o)]
-    if not verified:
-        return None
-    grey = note.startswith(_GREY_NOTE)
-    mine = _appearance(obj, scene, grey)
-    theirs = [a for o in verified if (a := _appearance(o, scene, grey)) is not None]
-    if mine is None or not theirs:
-        return None
-    d = min(float(hellinger(mine, t)) for t in theirs)
-    limit = scene.colour.max_distance
-    if grey and scene.grey is not None:
-        limit = scene.grey.max_distance
-    if d <= limit:
-        return None
-    what = "grey levels" if grey else "colours"
-    why = (
-        f"not named {label}: its {what} are {d:.2f} from those of the {label} verified by its "
-        f"keypoints in this scene (> {limit:g}): not another {label}"
-    )
-    return dataclasses.replace(obj, notes=(*obj.notes, why))
-
-
-def _appearance(obj: SceneObject, scene: _Scene, grey: bool) -> NDArray[np.float64] | None:
-    """The signature the colour cue (chromatic part, renormalised) or the grey cue (without
-    the floor-like pixels) compares for ``obj``'s pixels; None when it has too few."""
-    rgb, uv, _idx = _object_pixels(obj, scene.rgb, scene.camera)
-    chroma = chromatic_pixels(rgb)
-    if not grey:
-        if int(chroma.sum()) < scene.colour.min_pixels:
-            return None
-        return np.asarray(_chroma(colour_signature(rgb))[0], np.float64)
-    if scene.grey is None or not len(rgb):
-        return None
-    got = _grey_pixels((uv.astype(np.intp), chroma), scene, scene.grey)
-    return None if got is None else np.asarray(got[0], np.float64)
 
 
 def _misshapen(
