@@ -177,7 +177,7 @@ def test_another_instance_by_colour_must_look_like_the_one_its_keypoints_verifie
     """The cup is verified by its keypoints in the scene (no cue's note). An unknown object
     whose colours fit the cup's training views (orange and green, half and half) is a second
     cup only if it also looks like that cup: beside a verified cup that is all orange but
-    for a sliver of green (Hellinger 0.39 from it, > max_distance 0.22) it stays unknown, with
+    for a sliver of green (Hellinger 0.39 from it, > INSTANCE_DISTANCE 0.35) it stays unknown, with
     the reason; beside one of the same colours it is "cup 2"."""
     image = np.zeros((240, 320, 3), np.uint8)
     image[:] = FLOOR
