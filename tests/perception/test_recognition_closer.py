@@ -224,7 +224,7 @@ class _Crowded(_Fixed):
 @pytest.mark.parametrize(("share", "named"), [(0.04, False), (0.08, True), (1.0, True)])
 def test_a_few_inliers_among_many_matches_name_nothing(share: float, named: bool) -> None:
     """Inliers spread over the whole region, but 4 % of the matches (a never-learnt brick
-    crate's 8 of 170 for "cereal"): chance agreement, not named (``min_share`` 0.06)."""
+    crate's 8 of 170 for "cereal"): chance agreement, not named (``min_share`` 0.05)."""
     img = _textured()
     look = _Crowded("cat", _box(40, 60, 120, 140), share)
     out = closer_look([_unknown(40, 60, 120, 140)], img, K, look)
