@@ -233,7 +233,7 @@ def stereo_stage(
         with timed(timings, "geometry"):
             shape = (left.shape[0], left.shape[1])
             made = None if plain is None else plain.result
-            geometry = geometry_for(shape, result, opts[1], left, plain=made)
+            geometry = geometry_for(shape, result, opts[1], left, plain=made, right=right)
     return StereoStage(feats_r, result, geometry)
 
 

@@ -512,6 +512,32 @@ def test_small_far_object_needs_fewer_inliers(built_db: Path, scene: Scene) -> N
     assert stray_result.detections == ()
 
 
+def test_a_few_inliers_among_many_matches_are_chance(built_db: Path, scene: Scene) -> None:
+    """The 6 keypoints of the far rocket are a small detection; with 64 more of the rocket's
+    descriptors scattered over the scene (they pass the ratio test into the same views, but
+    agree on no geometry) the 6 are under a tenth of the matches: the many matches of a
+    texture that only looks alike, among which a handful line up by chance (``small_share``).
+    A detection with ``min_inliers`` inliers needs no share."""
+    rocket = detect(scene.objects["rocket"])
+    rng = np.random.default_rng(5)
+    _, first = np.unique(np.rint(rocket.xy), axis=0, return_index=True)
+    picks = rng.choice(first, 6, replace=False)
+    far = _similarity(1 / 7, 8, 400, 300)
+    others = rng.choice(np.setdiff1d(np.arange(len(rocket)), picks), 64, replace=False)
+    scattered = rng.uniform([0, 0], [1000, 750], (64, 2))
+    small = _concat(scene.background_features, _placed(rocket, picks, far))
+    query = _with_stray(small, rocket, others, scattered)
+    with ObjectDatabase.open(built_db, readonly=True) as db:
+        alone = db.label(small)
+        crowded = db.label(query)
+        no_share = db.label(query, small_share=0.0)
+    assert [d.label for d in alone.detections] == ["rocket"]
+    assert [d.label for d in no_share.detections] == ["rocket"]  # the rule is what refuses it
+    det = no_share.detections[0]
+    assert det.score < 8 and det.matches > 10 * det.score
+    assert crowded.detections == ()
+
+
 def test_matches_split_between_views_are_pooled(tmp_path: Path, scene: Scene) -> None:
     # Two overlapping training views of one photo (its left and right parts): a keypoint of the
     # shared middle has a near-copy in both, and which one is its nearest neighbour is chance.

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import sqlite3
 from pathlib import Path
@@ -167,3 +168,49 @@ def test_colour_signatures_stored_with_masked_views_and_version_1_files_upgraded
         version = conn.execute("SELECT value FROM meta WHERE key = 'schema_version'").fetchone()
     conn.close()
     assert version == ("3",)
+
+
+@pytest.mark.parametrize(("green_columns", "named"), [(20, True), (2, False)])
+def test_another_instance_by_colour_must_look_like_the_one_its_keypoints_verified(
+    green_columns: int, named: bool
+) -> None:
+    """The cup is verified by its keypoints in the scene (no cue's note). An unknown object
+    whose colours fit the cup's training views (orange and green, half and half) is a second
+    cup only if it also looks like that cup: beside a verified cup that is all orange but
+    for a sliver of green (Hellinger 0.39 from it, > INSTANCE_DISTANCE 0.35) it stays unknown, with
+    the reason; beside one of the same colours it is "cup 2"."""
+    image = np.zeros((240, 320, 3), np.uint8)
+    image[:] = FLOOR
+    image[60:130, 40:60] = ORANGE  # the unknown object: orange and green, 70 x 40 px
+    image[60:130, 60:80] = GREEN
+    image[60:130, 200 : 240 - green_columns] = ORANGE  # the verified cup
+    image[60:130, 240 - green_columns : 240] = GREEN
+    unknown = dataclass_replace(_patch_object(image, (40, 60, 80, 130), 1.0), "unknown object 1")
+    cup = _patch_object(image, (200, 60, 240, 130), 1.0)
+    cup = dataclasses.replace(cup, label="cup", name="cup")
+    out = name_unknown_objects([cup, unknown], image, K, MODELS)
+    assert (out[1].label == "cup") is named
+    if named:
+        assert out[1].name == "cup 2"
+    else:
+        assert "verified by its keypoints in this scene" in out[1].notes[-1]
+    # with no cup verified in the scene (or one named by colour alone) the cue names it
+    alone = name_unknown_objects([unknown], image, K, MODELS)
+    assert alone[0].label == "cup"
+    by_colour = dataclasses.replace(cup, notes=("named by colour and shape (distance 0.1)",))
+    assert name_unknown_objects([by_colour, unknown], image, K, MODELS)[1].label == "cup"
+
+
+def test_colours_only_near_the_views_name_nothing() -> None:
+    """Orange and green 85 / 15 against the cup's half and half: Hellinger 0.27, as near as the
+    never-learnt books named "can" on the default set's leave-half-out split (0.23-0.27; every
+    right colour naming of the session-9 runs 0.21 or nearer): not named with ``max_distance``
+    0.22, named with the old 0.3."""
+    from scenespeak.perception.recognition.colour import ColourOptions
+
+    sig = colour_signature(np.r_[_pixels(ORANGE, n=85), _pixels(GREEN, n=15)])
+    assert name_by_colour(sig, 1.2, MODELS) is None
+    old = name_by_colour(sig, 1.2, MODELS, ColourOptions(max_distance=0.3))
+    assert old is not None and old[0] == "cup" and 0.22 < old[1] < 0.3
+    near = colour_signature(np.r_[_pixels(ORANGE, n=65), _pixels(GREEN, n=35)])
+    assert name_by_colour(near, 1.2, MODELS)[0] == "cup"  # type: ignore[index]

@@ -3,6 +3,8 @@ and the object found in its own training photo without a mask."""
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 
 from scenespeak.perception.objects import make_object, radius_inliers, scaled_radius
@@ -74,12 +76,21 @@ def test_keypoint_votes_name_a_segment_but_chance_matches_do_not() -> None:
     matched = np.array([7, 7, 7, 7, 2, 3, 4])
     names = {7: "mug", 2: "a", 3: "b", 4: "c"}
     opts = RegionStageOptions()
-    # a second instance of a mug verified elsewhere in the scene: 4 votes are enough
-    assert vote_segments(seg, xy, matched, names, set(), opts, frozenset({"mug"})) == [
+    # a mug verified elsewhere in the scene lends this segment no evidence: another instance
+    # needs min_votes (8) of its own, as a first one does (it was 4: evidence borrowed from
+    # the verified one)
+    assert vote_segments(seg, xy, matched, names, set(), opts, frozenset({"mug"})) == []
+    assert vote_segments(seg, xy, matched, names, set(), opts) == []
+    lower = dataclasses.replace(opts, min_votes_instance=4)  # the old bar names it
+    assert vote_segments(seg, xy, matched, names, set(), lower, frozenset({"mug"})) == [
         (0, "mug", 4, -1)
     ]
-    # a mug verified nowhere needs min_votes (8)
-    assert vote_segments(seg, xy, matched, names, set(), opts) == []
+    eight = np.array([[6, 6], [8, 9], [11, 18], [18, 6], [22, 22], [7, 21], [16, 12], [20, 15]])
+    more = np.r_[eight.astype(float), xy[4:]]
+    votes = np.r_[np.full(8, 7), matched[4:]]
+    assert vote_segments(seg, more, votes, names, set(), opts, frozenset({"mug"})) == [
+        (0, "mug", 8, -1)
+    ]
     assert name_segments(seg, [xy[:4], xy[4:]]) == [0, 1]
 
 

@@ -137,21 +137,31 @@ def geometry_for(
     strategy: StrategyOptions,
     image: NDArray[np.generic] | None = None,
     plain: Callable[[], PlainParts] | None = None,
+    right: NDArray[np.generic] | None = None,
 ) -> SceneGeometry | None:
     """The support plane and segments :func:`scene_objects` will use with this strategy (None
     when it uses none): they need the stereo stage only, not the labels, so the pipeline
     computes them in its stereo thread while this one labels (the call
     :func:`scenespeak.perception.scene_regions.objects_from_regions` makes, plus the left
     ``image`` whose plain background takes part in no segment; ``plain``: a call returning
-    :func:`plain_for` of that image, when another thread makes it)."""
+    :func:`plain_for` of that image, when another thread makes it). With the ``right`` image
+    too, the segments are made on the stereo stage's map widened to the depths its keypoints'
+    range and box could not measure (:func:`scenespeak.perception.stereo.reach.widened`: an
+    object nearer or farther than every matched keypoint); the stage's own map, which its
+    points were checked against, is left as it is."""
     resampled = bool(result.rect.needs_resampling)
     if result.dense is None or not strategy.uses_geometry(dense_map=True, resampled=resampled):
         return None
     from scenespeak.perception.scene_regions import RegionStageOptions, scene_geometry
 
+    dense = result.dense
+    if image is not None and right is not None:
+        from scenespeak.perception.stereo.reach import widened
+
+        dense = widened(image, right, dense)
     up = np.asarray(result.rect.rig.up, dtype=np.float64)
     regions = RegionStageOptions().regions
-    return scene_geometry(result.dense, up, (shape[0], shape[1]), regions, image=image, plain=plain)
+    return scene_geometry(dense, up, (shape[0], shape[1]), regions, image=image, plain=plain)
 
 
 def plain_for(image: NDArray[np.generic], shape: tuple[int, int]) -> PlainParts:

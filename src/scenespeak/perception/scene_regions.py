@@ -98,7 +98,11 @@ class RegionStageOptions:
         Naming an unclaimed segment by keypoint votes (:func:`vote_segments`): ``min_votes``
         for an object not verified anywhere in the scene, ``min_votes_instance`` for another
         instance of one that was (on the tuning set 3-6 chance votes for one object landed on
-        a plain distractor and on the sky, so an unverified object needs many).
+        a plain distractor and on the sky, so an unverified object needs many). Both 8 (the
+        instance's was 4): another instance needs evidence of its own as strong as a first
+        one needs — a detection elsewhere in the scene says the label is there, not that this
+        segment is it (a never-learnt object beside a verified one collects chance votes for
+        it as readily as anywhere).
     lone_share, lone_gap : float
         A detection with no keypoint depth and no segment holding its keypoints is placed by
         the one unclaimed segment with at least ``lone_share`` of its pixels inside its
@@ -126,7 +130,7 @@ class RegionStageOptions:
     unknown_max_extent: float = 0.6
     unknown_max_distance: float = 2.5
     min_votes: int = 8
-    min_votes_instance: int = 4
+    min_votes_instance: int = 8
     vote_share: float = 0.6
     vote_lead: float = 2.0
     lone_share: float = 0.5

@@ -105,8 +105,9 @@ def _detect_in_view(
     if n_in <= floor:
         return None
     in_scene = _apply_h(fit.h, outline.astype(np.float64))
-    if n_in < o.min_inliers and not _small_enough(
-        in_scene, features.xy[qi[fit.inliers]], o.small_area, o.min_inliers_small
+    if n_in < o.min_inliers and (
+        not _small_enough(in_scene, features.xy[qi[fit.inliers]], o.small_area, o.min_inliers_small)
+        or n_in < o.small_share * len(qi)
     ):
         return None
     return Detection(

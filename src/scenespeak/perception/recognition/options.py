@@ -48,6 +48,14 @@ class LabelOptions:
         8,000 px² — largest outline area for the small-detection rule (0: off). 4 under 8,000
         px² was measured on the 100-scene evaluation (366/393 objects, no false objects in
         clutter; ``docs/database.md``).
+    small_share : float
+        0.1 — ... and only when its inliers are at least this share of its view's matches. A
+        texture that only looks like a learnt one passes the ratio test many times, and among
+        many matches a handful agree with some model by chance (Lowe 2004, sec. 7.4: the
+        probability of a false match grows with the matches examined): a never-learnt brick
+        crate gave "cereal" 6 inliers of 178 matches, 5 of 59 (leave-part-out, tuning-40).
+        Right small detections on tuning-40 and stress60 had 0.11-1.0 (a brick crate's 5 of
+        45 the lowest).
     max_instances : int
         4 — instances of one object looked for: after each accepted detection the matches
         inside its outline are taken away and the object is searched again (1: one per label).
@@ -93,6 +101,7 @@ class LabelOptions:
     nprobe: int = 4
     min_inliers_small: int = 4
     small_area: float = 8000.0
+    small_share: float = 0.1
     max_instances: int = 4
     instance_overlap: float = 0.25
     instance_span: float = 1.3
