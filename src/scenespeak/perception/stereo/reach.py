@@ -33,6 +33,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from scenespeak.perception.features import to_gray
+from scenespeak.perception.regions import clean_disparity
 from scenespeak.perception.stereo.dense import dense_disparity, sgbm_map
 from scenespeak.perception.stereo.results import DenseDisparity
 
@@ -89,8 +90,7 @@ def coarse_disparity(
         sl = np.asarray(cv2.copyMakeBorder(sl, 0, 0, border, 0, cv2.BORDER_CONSTANT, value=0))
         sr = np.asarray(cv2.copyMakeBorder(sr, 0, 0, border, 0, cv2.BORDER_CONSTANT, value=0))
     raw = sgbm_map(sl, sr, mn, num, 3, 10)[:, border:].astype(np.float32) / 16.0
-    ok = (raw > mn + 0.5) & (raw < mn + num - 1.5)
-    return np.where(ok, raw * f, np.float32(np.nan)).astype(np.float32)
+    return clean_disparity(raw, mn, num) * np.float32(f)
 
 
 def _missed(
@@ -126,7 +126,8 @@ def widened(
     ``dense`` itself when the coarse look finds none (or the pair is resampled).
 
     The result's search range spans both passes; each pass's values at its own range's ends
-    are cleaned away first (NaN), as the segmentation cleans a single map.
+    are cleaned away first (NaN, :func:`~scenespeak.perception.regions.clean_disparity`), as the
+    segmentation cleans a single map.
     """
     o = options or ReachOptions()
     rect = dense.rect
@@ -149,8 +150,8 @@ def widened(
     mn = math.floor(float(d.min()) - o.margin)
     num = int(16 * math.ceil((float(d.max()) + o.margin - mn) / 16.0))
     extra = dense_disparity(left, right, rect, roi=box, min_disparity=mn, num_disparities=num)
-    first = _cleaned(dense.disparity, dense.min_disparity, dense.num_disparities)
-    second = _cleaned(extra.disparity, mn, num)
+    first = clean_disparity(dense.disparity, dense.min_disparity, dense.num_disparities)
+    second = clean_disparity(extra.disparity, mn, num)
     # the second pass's values outside the first's range, where the coarse look saw that
     # depth (within ``margin`` of it): the missed object, not whatever else the wider search
     # lets through
@@ -170,12 +171,3 @@ def widened(
     return dataclasses.replace(
         dense, disparity=merged, min_disparity=lo_all, num_disparities=hi_all - lo_all, roi=roi
     )
-
-
-def _cleaned(disparity: NDArray[np.floating], mn: int, num: int) -> NDArray[np.float32]:
-    """``disparity`` with the values at the ends of its search range as NaN (no depth there:
-    SGBM's winner where nothing matches; the segmentation's ``clean_disparity``)."""
-    d = np.asarray(disparity, np.float32)
-    with np.errstate(invalid="ignore"):
-        ok = (d > mn + 0.5) & (d < mn + num - 1.5)
-    return np.where(ok, d, np.float32(np.nan)).astype(np.float32)
