@@ -40,7 +40,12 @@ from scenespeak.cli.points import _stereo_points
 from scenespeak.perception import calibration, features, plausibility, stereo
 from scenespeak.perception.features import detect, to_gray
 
-ART = Path(__file__).resolve().parents[1] / "../shared/data/real/stereo/middeval2/Art"
+#: the real data (``SCENESPEAK_REAL_DATA``, as the tests take it, or ``../shared/data/real``)
+REAL = Path(
+    os.environ.get("SCENESPEAK_REAL_DATA")
+    or Path(__file__).resolve().parents[1] / "../shared/data/real"
+)
+ART = REAL / "stereo/middeval2/Art"
 #: (module, attribute, phase name) of the calls recorded, in the order they run.
 PHASES = (
     (features, "detect", "SIFT"),

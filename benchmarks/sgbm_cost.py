@@ -37,7 +37,12 @@ from scenespeak.perception import calibration, stereo
 from scenespeak.perception.features import detect, load_image, to_gray
 from scenespeak.perception.stage_options import StereoOptions
 
-ART = Path(__file__).resolve().parents[1] / "../shared/data/real/stereo/middeval2/Art"
+#: the real data (``SCENESPEAK_REAL_DATA``, as the tests take it, or ``../shared/data/real``)
+REAL = Path(
+    os.environ.get("SCENESPEAK_REAL_DATA")
+    or Path(__file__).resolve().parents[1] / "../shared/data/real"
+)
+ART = REAL / "stereo/middeval2/Art"
 
 
 def _timed(fn: Callable[[], object]) -> tuple[float, float]:
