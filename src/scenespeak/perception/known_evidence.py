@@ -86,6 +86,8 @@ def region_keypoints(
         return np.zeros(len(xy), bool)
     h, w = shape
     inside = (xy[:, 0] >= 0) & (xy[:, 0] < w) & (xy[:, 1] >= 0) & (xy[:, 1] < h)
+    lo, hi = hull.min(axis=0), hull.max(axis=0)  # only keypoints in the hull's box are tested
+    inside &= np.all((xy >= lo) & (xy <= hi), axis=1)
     out = np.zeros(len(xy), bool)
     contour = hull.astype(np.float32).reshape(-1, 1, 2)
     for i in np.flatnonzero(inside):
