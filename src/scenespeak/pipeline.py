@@ -420,17 +420,18 @@ def _after_stereo(
             # by colour and shape (recognition.colour); the points project into the left image
             # as given only when it was not resampled
             left, matched = early.images[0], early.labelling.matched
-            veto = KeypointEvidence.veto(
+            evidence = KeypointEvidence.of_labelling(
                 rig.K_left, left.shape, early.features_left.xy, matched, early.id_to_label
             )
+            veto = None if evidence is None else evidence.refuses
             if early.look is not None:
                 objects = closer_look(objects, left, rig.K_left, early.look, veto=veto)
             trim = (np.asarray(rig.up, np.float64), replace(opts.objects, radius=None))
             geo, shape = early.stereo.geometry, None
             if geo is not None:  # names by colour or grey must fit the segment's shape
                 shape = ShapeGuard(geo.normal, geo.level)
-            objects = name_unknown_objects(
-                objects, left, rig.K_left, early.colours, remake=trim, veto=veto, shape=shape
+            objects = name_unknown_objects(  # the keypoints veto or corroborate a cue's name
+                objects, left, rig.K_left, early.colours, remake=trim, veto=evidence, shape=shape
             )
 
     say("relations")

@@ -86,6 +86,8 @@ def region_keypoints(
         return np.zeros(len(xy), bool)
     h, w = shape
     inside = (xy[:, 0] >= 0) & (xy[:, 0] < w) & (xy[:, 1] >= 0) & (xy[:, 1] < h)
+    lo, hi = hull.min(axis=0), hull.max(axis=0)  # only keypoints in the hull's box are tested
+    inside &= np.all((xy >= lo) & (xy <= hi), axis=1)
     out = np.zeros(len(xy), bool)
     contour = hull.astype(np.float32).reshape(-1, 1, 2)
     for i in np.flatnonzero(inside):
@@ -146,6 +148,24 @@ class KeypointEvidence:
         return cls(camera, shape, keypoints_xy, votes, options or EvidenceOptions())
 
     @classmethod
+    def of_labelling(
+        cls,
+        camera: NDArray[np.float64],
+        shape: tuple[int, ...],
+        keypoints_xy: NDArray[np.float64],
+        matched: NDArray[np.integer],
+        id_to_label: Mapping[int, str],
+    ) -> KeypointEvidence | None:
+        """:meth:`from_matches` (``shape``'s first two entries: the image's rows and
+        columns); None without the database's ids (nothing to say)."""
+        if not id_to_label:
+            return None
+        xy = np.asarray(keypoints_xy, np.float64)
+        rows_cols = (int(shape[0]), int(shape[1]))
+        cam = np.asarray(camera, np.float64)
+        return cls.from_matches(cam, rows_cols, xy, matched, id_to_label)
+
+    @classmethod
     def veto(
         cls,
         camera: NDArray[np.float64],
@@ -154,14 +174,31 @@ class KeypointEvidence:
         matched: NDArray[np.integer],
         id_to_label: Mapping[int, str],
     ) -> Callable[[SceneObject, str], str | None] | None:
-        """:meth:`refuses` of :meth:`from_matches` (``shape``'s first two entries: the
-        image's rows and columns); None without the database's ids (nothing to say)."""
-        if not id_to_label:
-            return None
-        xy = np.asarray(keypoints_xy, np.float64)
-        rows_cols = (int(shape[0]), int(shape[1]))
-        cam = np.asarray(camera, np.float64)
-        return cls.from_matches(cam, rows_cols, xy, matched, id_to_label).refuses
+        """:meth:`refuses` of :meth:`of_labelling` (None without the database's ids)."""
+        ev = cls.of_labelling(camera, shape, keypoints_xy, matched, id_to_label)
+        return None if ev is None else ev.refuses
+
+    def votes_in(self, obj: SceneObject) -> dict[str, int]:
+        """How many of the keypoints in ``obj``'s image region voted for each label.
+
+        >>> from scenespeak.perception.objects import make_object
+        >>> sq = [[x, y, 1.0] for x in (-0.1, 0.0, 0.1) for y in (-0.1, 0.0, 0.1)]
+        >>> obj = make_object("box", sq, np.array([0.0, -1.0, 0.0]), outliers="none")
+        >>> K = np.array([[500.0, 0, 320], [0, 500, 240], [0, 0, 1]])
+        >>> xy = np.c_[np.linspace(280, 360, 6), np.full(6, 240.0)]
+        >>> ev = KeypointEvidence(K, (480, 640), xy, ["tin", "tin", "jar", None, None, "tin"])
+        >>> ev.votes_in(obj)
+        {'tin': 3, 'jar': 1}
+        """
+        inside = region_keypoints(obj, self.camera, self.shape, self.keypoints_xy)
+        if len(self.votes) != len(inside):
+            return {}
+        out: dict[str, int] = {}
+        for i in np.flatnonzero(inside):
+            label = self.votes[int(i)]
+            if label is not None:
+                out[label] = out.get(label, 0) + 1
+        return out
 
     def refuses(self, obj: SceneObject, label: str) -> str | None:
         """Why ``obj`` cannot be ``label`` by the keypoints (None: they do not say)."""

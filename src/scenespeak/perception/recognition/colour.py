@@ -35,7 +35,7 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Callable, Collection, Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Protocol, runtime_checkable
 
 import cv2
 import numpy as np
@@ -45,9 +45,7 @@ from scipy.spatial import cKDTree
 from scenespeak.perception.objects import ObjectOptions, SceneObject, make_object
 from scenespeak.perception.recognition.grey import (
     GreyOptions,
-    floor_like,
-    gradient_strength,
-    grey_signature,
+    grey_pixels,
     hellinger,
     name_by_grey,
 )
@@ -57,6 +55,7 @@ __all__ = [
     "BINS",
     "ColourModel",
     "ColourOptions",
+    "Keypoints",
     "chromatic_pixels",
     "colour_signature",
     "hellinger",
@@ -293,6 +292,16 @@ def _object_pixels(
     return rgb, uv.astype(np.float64), idx.astype(np.intp)
 
 
+@runtime_checkable
+class Keypoints(Protocol):
+    """What the first look's keypoints say of an object (``KeypointEvidence``): why it cannot
+    be a label, and how many keypoints in its image region voted for each label."""
+
+    def refuses(self, obj: SceneObject, label: str) -> str | None: ...
+
+    def votes_in(self, obj: SceneObject) -> Mapping[str, int]: ...
+
+
 _GREY_NOTE = "named by grey levels, texture and shape"
 #: An unknown object whose footprint comes this near (metres) an object already labelled
 #: ``L`` is not named ``L`` by grey levels: it is a piece of that object that its detection did
@@ -333,7 +342,7 @@ def name_unknown_objects(
     models: Mapping[str, ColourModel],
     options: ColourOptions | None = None,
     remake: tuple[NDArray[np.float64], ObjectOptions] | None = None,
-    veto: Callable[[SceneObject, str], str | None] | None = None,
+    veto: Callable[[SceneObject, str], str | None] | Keypoints | None = None,
     shape: ShapeGuard | None = None,
 ) -> tuple[SceneObject, ...]:
     """``objects`` with the unknown ones that colour and shape name (:func:`name_by_colour`),
@@ -357,12 +366,15 @@ def name_unknown_objects(
         make_object`) of only its points inside the box round its chromatic pixels (named by
         colour) or not like the floor (named by grey levels): the dense map smears an
         object's depth over a plain floor beside it, and those points belong to no object.
-    veto : callable, optional
+    veto : callable or Keypoints, optional
         ``veto(obj, label)``: why ``obj`` cannot be named ``label`` by colour (None: it may
         be), e.g. :meth:`scenespeak.perception.known_evidence.KeypointEvidence.refuses`; a
         vetoed object stays unknown with a note saying why. Not asked of names by grey
         levels: the grey cue's textures (a cell photo, a star field) give keypoints that are
-        not distinctive enough to pass the ratio test, so few votes say nothing there.
+        not distinctive enough to pass the ratio test, so few votes say nothing there. Given
+        :class:`Keypoints` (a ``KeypointEvidence``), its ``refuses`` is the veto and its
+        ``votes_in`` may corroborate a grey name whose lead is short
+        (:func:`~scenespeak.perception.recognition.grey.corroborated`).
     shape : ShapeGuard, optional
         With it, a name by colour or grey levels whose segment, stood on the support plane,
         has a silhouette that fits none of the name's training views is refused
@@ -374,7 +386,9 @@ def name_unknown_objects(
     grey = o.grey
     if not models or img.ndim != 3 or img.shape[2] < 3 or img.dtype != np.uint8:
         return tuple(objects)
-    scene = _Scene(img[..., :3], np.asarray(camera, np.float64), models, o, grey, shape)
+    votes = veto.votes_in if isinstance(veto, Keypoints) else None
+    veto = veto.refuses if isinstance(veto, Keypoints) else veto
+    scene = _Scene(img[..., :3], np.asarray(camera, np.float64), models, o, grey, shape, votes)
     out = list(objects)
     for i, obj in enumerate(out):
         if not obj.label.startswith("unknown object"):
@@ -489,6 +503,7 @@ class _Scene:
     colour: ColourOptions
     grey: GreyOptions | None
     guard: ShapeGuard | None = None
+    votes: Callable[[SceneObject], Mapping[str, int]] | None = None
     _gray: NDArray[np.uint8] | None = None
 
     def allowed(self, xyz: NDArray[np.floating]) -> frozenset[str] | None:
@@ -532,52 +547,34 @@ def _name_one(obj: SceneObject, scene: _Scene) -> tuple[str, str, NDArray[np.int
     g = scene.grey
     if g is None or not len(rgb) or float(chroma.mean()) >= g.min_chroma:
         return None
-    return _name_grey((uv.astype(np.intp), chroma), (np.asarray(obj.xyz), idx), scene, g)
+    return _name_grey((uv.astype(np.intp), chroma), (obj, idx), scene, g)
 
 
 def _name_grey(
     pixels: tuple[NDArray[np.intp], NDArray[np.bool_]],
-    points: tuple[NDArray[np.float64], NDArray[np.intp]],
+    points: tuple[SceneObject, NDArray[np.intp]],
     scene: _Scene,
     g: GreyOptions,
 ) -> tuple[str, str, NDArray[np.intp]] | None:
     """An unknown grey object named by grey levels, texture and shape (its pixels ``uv`` and
-    which are chromatic, its points ``xyz`` and which of them the pixels are), or None."""
-    xyz, idx = points
+    which are chromatic, the object and which of its points the pixels are), or None; a
+    short lead may be corroborated by the keypoints' votes (``scene.votes``)."""
+    obj, idx = points
     models = scene.grey_models(g.model_chroma)
-    if len(models) < 2:
-        return None
-    got = _grey_pixels(pixels, scene, g)
+    got = grey_pixels(pixels, scene.gray(), g) if len(models) >= 2 else None
     if got is None:
         return None
     sig, u, own = got
-    allowed = scene.allowed(xyz[idx[own]])
-    named = name_by_grey(sig, _box_aspect(u.astype(np.float64)), models, g, allowed)
+    allowed = scene.allowed(np.asarray(obj.xyz)[idx[own]])
+    votes = None if scene.votes is None else scene.votes(obj)
+    named = name_by_grey(sig, _box_aspect(u.astype(np.float64)), models, g, allowed, votes)
     if named is None:
         return None
     label, d1, d2 = named
-    note = f"{_GREY_NOTE} (distance {d1:.2f}, next object {d2:.2f})"
-    return label, note, idx[own]
-
-
-def _grey_pixels(
-    pixels: tuple[NDArray[np.intp], NDArray[np.bool_]], scene: _Scene, g: GreyOptions
-) -> tuple[NDArray[np.float32], NDArray[np.intp], NDArray[np.bool_]] | None:
-    """The grey signature of an object's pixels ``uv`` (which are chromatic: ``chroma``)
-    without the floor-like ones, those pixels, and which of ``uv`` they are; None when fewer
-    than ``g.min_pixels`` are left."""
-    uv, chroma = pixels
-    gray = scene.gray()
-    lo = np.maximum(uv.min(axis=0) - 1, 0)
-    hi = uv.max(axis=0) + 2
-    strength = gradient_strength(gray[lo[1] : hi[1], lo[0] : hi[0]])[
-        uv[:, 1] - lo[1], uv[:, 0] - lo[0]
-    ]
-    own = ~floor_like(gray, uv, strength, g.floor_tolerance)
-    if int(own.sum()) < g.min_pixels:
-        return None
-    u, s = uv[own], strength[own]
-    return grey_signature(gray[u[:, 1], u[:, 0]], s, chroma[own]), u, own
+    note = f"{_GREY_NOTE} (distance {d1:.2f}, next object {d2:.2f}"
+    if votes is not None and (d2 < g.lead * d1 or d2 - d1 < g.margin):
+        note += f"; {votes.get(label, 0)} keypoints voted for it"
+    return label, note + ")", idx[own]
 
 
 def _renumbered(objects: list[SceneObject]) -> list[SceneObject]:

@@ -23,12 +23,12 @@ from scenespeak.perception.objects import SceneObject
 from scenespeak.perception.recognition.colour import (
     _GREY_NOTE,
     _chroma,
-    _grey_pixels,
     _object_pixels,
     chromatic_pixels,
     colour_signature,
     hellinger,
 )
+from scenespeak.perception.recognition.grey import grey_pixels
 
 if TYPE_CHECKING:
     from scenespeak.perception.recognition.colour import _Scene
@@ -96,5 +96,5 @@ def _appearance(obj: SceneObject, scene: _Scene, grey: bool) -> NDArray[np.float
         return np.asarray(_chroma(colour_signature(rgb))[0], np.float64)
     if scene.grey is None or not len(rgb):
         return None
-    got = _grey_pixels((uv.astype(np.intp), chroma), scene, scene.grey)
+    got = grey_pixels((uv.astype(np.intp), chroma), scene.gray(), scene.grey)
     return None if got is None else np.asarray(got[0], np.float64)
