@@ -122,7 +122,7 @@ def test_a_segment_the_first_look_cannot_name_is_named_by_a_view_from_above() ->
 
 def test_a_name_from_above_stands_on_its_own_votes_not_the_first_looks() -> None:
     """The first look's veto (few of its votes for the name) does not speak for views it did
-    not have; this look's votes do: under 10 % of the region's keypoints, no name."""
+    not have; this look's votes do: under 5 % of the region's keypoints, no name."""
     img, obj = _scene(), _box_object()
 
     def veto(_o: SceneObject, label: str) -> str:
@@ -132,7 +132,7 @@ def test_a_name_from_above_stands_on_its_own_votes_not_the_first_looks() -> None
     assert out[0].label == "tin"
     out = closer_look([obj], img, K, _nothing, veto=veto, elevated=_Above("tin", 0.02))
     assert out[0].label == "unknown object 1"
-    assert "by a view from above" in out[0].notes[-1] and "(< 10 %)" in out[0].notes[-1]
+    assert "by a view from above" in out[0].notes[-1] and "(< 5 %)" in out[0].notes[-1]
 
 
 def test_the_view_from_above_is_not_asked_when_the_first_look_names_it() -> None:
@@ -146,3 +146,76 @@ def test_the_view_from_above_is_not_asked_when_the_first_look_names_it() -> None
     above = _Above("tin", 0.5)
     out = closer_look([obj], img, K, cat, elevated=above)
     assert out[0].label == "cat" and above.asked == 0
+
+
+# --- the generator's mug, learnt from its training views, seen from 40 degrees above -----------
+
+
+def _render_from(label: str, elevation: float, yaw: float, distance: float = 0.55):
+    """The generator's ``label`` rendered alone from ``elevation`` degrees above its middle,
+    ``distance`` m away (horizontally), and its points, plane and camera matrix in the
+    camera's frame."""
+    scenes = pytest.importorskip("scenespeak.tools.scenes")
+    from scenespeak.tools.render import downsample_labels, render
+    from scenespeak.tools.scene_model import CATALOGUE, SUPERSAMPLE, Placement, Rig
+
+    obj = {o.label: o for o in CATALOGUE}[label]
+    rise = distance * np.tan(np.radians(elevation))
+    rig = Rig(elevation, obj.size[2] / 2 + rise, 0.12, 60.0, (640, 480))
+    cam = rig.camera()
+    pl = Placement(obj, (0.0, distance, 0.0), yaw)
+    ((img, seg),) = render([pl.mesh()], [cam], SUPERSAMPLE)
+    mask = downsample_labels(seg, SUPERSAMPLE, 1) > 0
+    # the cylinder's surface in the world, then in the camera's frame (right, down, forward)
+    t, z = np.meshgrid(np.linspace(0, 2 * np.pi, 60), np.linspace(0, obj.size[2], 15))
+    r = obj.size[0] / 2
+    world = np.column_stack([r * np.cos(t.ravel()), distance + r * np.sin(t.ravel()), z.ravel()])
+    axes = np.array([cam.right, cam.down, cam.forward], np.float64)
+    eye = np.asarray(cam.eye, np.float64)
+    front = (world - eye) @ axes.T
+    front = front[(world[:, 1] - distance) * np.cos(np.radians(elevation)) < r * 0.3]
+    normal = axes @ np.array([0.0, 0.0, 1.0])
+    f = 320.0 / np.tan(np.radians(30.0))
+    k = np.array([[f, 0.0, 319.5], [0.0, f, 239.5], [0.0, 0.0, 1.0]])
+    del scenes
+    return img, mask, front, (normal, -float(eye[2])), k
+
+
+@pytest.mark.slow
+def test_cylinders_seen_from_above_are_named_by_their_views_from_above(tmp_path) -> None:
+    """The tin and the can, learnt from the generator's training views (about 17° above),
+    seen from 50° above: the closer look at their learnt views does not name them, the look
+    from above does. The mug, never learnt, seen so stays unknown (~40 s: renders)."""
+    scenes = pytest.importorskip("scenespeak.tools.scenes")
+    from scenespeak.perception.features import load_image
+    from scenespeak.perception.recognition import ObjectDatabase
+    from scenespeak.perception.recognition.elevated import add_elevated_views, elevated_look
+    from scenespeak.perception.recognition.options import LabelOptions
+    from scenespeak.tools.scene_model import CATALOGUE
+
+    cat = {o.label: o for o in CATALOGUE}
+    yaws = (0.0, 72.0, 144.0, -144.0, -72.0)
+    with ObjectDatabase.create(tmp_path / "objects.db") as db:
+        for label in ("can", "tin", "book", "card"):
+            paths = scenes.render_training_views(cat[label], tmp_path / label, yaws=yaws)
+            masks = [load_image(p.with_name(p.stem + "_mask.png"), gray=True) > 0 for p in paths]
+            db.add_object(label, paths, masks=masks)
+            stored = add_elevated_views(db, label, paths, masks)
+            assert (stored > 0) == (cat[label].shape == "cylinder")
+    with ObjectDatabase.open(tmp_path / "objects.db", readonly=True) as db:
+        make = elevated_look(db, LabelOptions())
+        assert make is not None
+        for label, distance, expected in (
+            ("tin", 0.4, "tin"),
+            ("can", 0.6, "can"),
+            ("mug", 0.4, "unknown object 1"),
+            ("mug", 0.6, "unknown object 1"),
+        ):
+            img, _mask, xyz, (normal, level), k = _render_from(label, 50.0, 36.0, distance)
+            obj = _unknown(xyz)
+            plain = closer_look([obj], img, k, db.labeller())
+            assert plain[0].label == "unknown object 1"
+            out = closer_look(
+                [obj], img, k, db.labeller(), elevated=make(ShapeGuard(normal, level))
+            )
+            assert out[0].label == expected, out[0].notes

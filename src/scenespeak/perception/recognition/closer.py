@@ -63,7 +63,7 @@ __all__ = ["CloserOptions", "closer_look", "coverage", "object_region"]
 #: ``MIN_VOTES`` passed the ratio test for the name is not its texture (the first look's
 #: :meth:`~scenespeak.perception.known_evidence.KeypointEvidence.refuses`, with this look's
 #: votes: the first look's are few by nature where the views from above are needed).
-MIN_KEYPOINTS, MIN_VOTES = 30, 0.1
+MIN_KEYPOINTS, MIN_VOTES = 30, 0.05
 _ABOVE = "a view from above"
 
 
