@@ -107,7 +107,7 @@ def cylinder_views_of(
 
 
 def _detect_inside(
-    image: NDArray[np.uint8], mask: NDArray[np.bool_], sift: tuple[int, float], pad: int = 16
+    image: NDArray[np.generic], mask: NDArray[np.bool_], sift: tuple[int, float], pad: int = 16
 ) -> Features:
     """SIFT features inside ``mask``, found in the box round it grown by ``pad`` pixels (the
     same keypoints as in the whole image but for the box's edge, at a fraction of the cost),
