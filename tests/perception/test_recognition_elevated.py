@@ -64,7 +64,7 @@ def test_the_candidates_are_the_cylinders_stored_near_its_elevation_that_it_coul
     guard = ShapeGuard(UP, -0.4)
     look = ElevatedLook("unused.db", have, None, aspects, guard)  # type: ignore[arg-type]
     near = _unknown(_cylinder(0.6, 0.4, 0.04, 0.1))
-    assert look.candidates(near) == (34.0, ("tin",))
+    assert look.candidates(near) == ((26.0, 34.0), ("tin",))
     far = _unknown(_cylinder(2.0, 0.4, 0.04, 0.1))
     assert look.candidates(far) is None
     assert BUCKET_REACH < 26.0 - 10.0

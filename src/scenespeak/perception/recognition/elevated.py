@@ -237,19 +237,20 @@ def _read_only(path: str) -> sqlite3.Connection:
     return sqlite3.connect(f"{Path(path).absolute().as_uri()}?mode=ro", uri=True)
 
 
-def _read_side(path: str, labels: Sequence[str], elevation: float) -> _Side:
-    """The stored views of ``labels`` at ``elevation`` whose source views are still the
-    ones they were made from (a fresh read-only connection: the closer look may run in
-    another thread than the one that opened the database)."""
+def _read_side(path: str, labels: Sequence[str], elevations: Sequence[float]) -> _Side:
+    """The stored views of ``labels`` at ``elevations`` whose source views are still the
+    ones they were made from, each known by its own row id (a fresh read-only connection: the
+    closer look may run in another thread than the one that opened the database)."""
     conn = _read_only(path)
     try:
         marks = ",".join("?" * len(labels))
         rows = conn.execute(
-            "SELECT e.label, e.view_id, e.n, e.descriptors, e.keypoints, e.outline "
+            "SELECT e.label, e.id, e.n, e.descriptors, e.keypoints, e.outline "
             "FROM elevated_views e JOIN views v ON v.id = e.view_id AND v.n = e.source_n "
             "JOIN objects o ON o.id = v.object_id AND o.label = e.label "
-            f"WHERE e.elevation = ? AND e.label IN ({marks}) ORDER BY e.id",
-            (elevation, *labels),
+            f"WHERE e.elevation IN ({','.join('?' * len(elevations))}) "
+            f"AND e.label IN ({marks}) ORDER BY e.id",
+            (*elevations, *labels),
         ).fetchall()
     finally:
         conn.close()
@@ -338,31 +339,33 @@ class ElevatedLook:
     aspects: Mapping[str, NDArray[np.floating] | None]
     guard: ShapeGuard
     options: LabelOptions = field(default_factory=LabelOptions)
-    _cache: dict[tuple[tuple[str, ...], float], _Side] = field(default_factory=dict)
+    _cache: dict[tuple[tuple[str, ...], tuple[float, ...]], _Side] = field(default_factory=dict)
 
-    def candidates(self, obj: SceneObject) -> tuple[float, tuple[str, ...]] | None:
-        """The stored elevation nearest the segment's and the labels it could be there."""
+    def candidates(self, obj: SceneObject) -> tuple[tuple[float, ...], tuple[str, ...]] | None:
+        """The stored elevations within :data:`BUCKET_REACH` of the segment's (one or two)
+        and the labels it could be there."""
         e = seen_from(obj.xyz, self.guard.normal, self.guard.level)
         if e is None:
             return None
-        stored = sorted({x for v in self.have.values() for x in v}, key=lambda x: abs(x - e))
-        if not stored or abs(stored[0] - e) > BUCKET_REACH:
+        near = tuple(
+            sorted({x for v in self.have.values() for x in v if abs(x - e) <= BUCKET_REACH})
+        )
+        if not near:
             return None
-        bucket = stored[0]
         prop = self.guard.proportion(obj.xyz)
         labels = tuple(
             sorted(
                 lab
                 for lab, elevs in self.have.items()
-                if bucket in elevs and self.guard.fits(prop, self.aspects.get(lab))
+                if set(near) & set(elevs) and self.guard.fits(prop, self.aspects.get(lab))
             )
         )
-        return (bucket, labels) if labels else None
+        return (near, labels) if labels else None
 
-    def _side(self, labels: tuple[str, ...], bucket: float) -> _Side:
-        key = (labels, bucket)
+    def _side(self, labels: tuple[str, ...], elevations: tuple[float, ...]) -> _Side:
+        key = (labels, elevations)
         if key not in self._cache:
-            self._cache[key] = _read_side(self.path, labels, bucket)
+            self._cache[key] = _read_side(self.path, labels, elevations)
         return self._cache[key]
 
     def __call__(self, obj: SceneObject, features: Features) -> Labelling | None:
