@@ -377,7 +377,10 @@ class ElevatedLook:
         side = self._side(found[1], found[0])
         if not len(side.descriptors):
             return None
-        return _label_side(side, self.main, features, self.options)
+        # the small-object rule wherever it stands (a near cylinder's region is large, but
+        # the half of it one view from above shows holds few of its matches)
+        o = dataclasses.replace(self.options, small_area=np.inf)
+        return _label_side(side, self.main, features, o)
 
 
 def _label_side(side: _Side, main: _Loaded, features: Features, o: LabelOptions) -> Labelling:
