@@ -185,7 +185,7 @@ def _render_from(label: str, elevation: float, yaw: float, distance: float = 0.5
 def test_cylinders_seen_from_above_are_named_by_their_views_from_above(tmp_path) -> None:
     """The tin and the can, learnt from the generator's training views (about 17° above),
     seen from 50° above: the closer look at their learnt views does not name them, the look
-    from above does. The mug, never learnt, seen so stays unknown (~40 s: renders)."""
+    from above does. The mug, never learnt, seen so stays unknown (~15 s: renders)."""
     scenes = pytest.importorskip("scenespeak.tools.scenes")
     from scenespeak.perception.features import load_image
     from scenespeak.perception.recognition import ObjectDatabase
