@@ -63,6 +63,7 @@ from scenespeak.perception.known_evidence import KeypointEvidence
 from scenespeak.perception.objects import ObjectOptions, SceneObject
 from scenespeak.perception.recognition.closer import closer_look
 from scenespeak.perception.recognition.colour import ColourModel, name_unknown_objects
+from scenespeak.perception.recognition.elevated import add_elevated_views, elevated_look
 from scenespeak.perception.recognition.options import LabelOptions
 from scenespeak.perception.recognition.results import Labelling
 from scenespeak.perception.recognition.shape_guard import ShapeGuard
@@ -330,6 +331,7 @@ def describe_scene(
             id_to_label=id_to_label,
             colours=colours,
             look=_closer_labeller(db, opts.labels, bool(id_to_label)),
+            elevated=elevated_look(db, opts.labels, bool(id_to_label)),
         )
 
         def rest(
@@ -362,6 +364,7 @@ class _EarlyStages:
     id_to_label: Mapping[int, str]
     colours: Mapping[str, ColourModel] = field(default_factory=dict)
     look: Callable[[Features], Labelling] | None = None
+    elevated: Any = None
 
 
 def _no_matches_error(src: Mapping[str, str], rig: Any, n_left: int, n_right: int) -> Exception:
@@ -424,12 +427,15 @@ def _after_stereo(
                 rig.K_left, left.shape, early.features_left.xy, matched, early.id_to_label
             )
             veto = None if evidence is None else evidence.refuses
-            if early.look is not None:
-                objects = closer_look(objects, left, rig.K_left, early.look, veto=veto)
-            trim = (np.asarray(rig.up, np.float64), replace(opts.objects, radius=None))
             geo, shape = early.stereo.geometry, None
             if geo is not None:  # names by colour or grey must fit the segment's shape
                 shape = ShapeGuard(geo.normal, geo.level)
+            if early.look is not None:
+                above = early.elevated(shape) if early.elevated and shape else None
+                objects = closer_look(
+                    objects, left, rig.K_left, early.look, veto=veto, elevated=above
+                )
+            trim = (np.asarray(rig.up, np.float64), replace(opts.objects, radius=None))
             objects = name_unknown_objects(  # the keypoints veto or corroborate a cue's name
                 objects, left, rig.K_left, early.colours, remake=trim, veto=evidence, shape=shape
             )
@@ -579,6 +585,7 @@ def database_from_dataset(
             if use_masks is None:
                 use_masks = [_auto_mask(v) for v in views]
             database.add_object(folder.name, views, masks=use_masks, replace=replace)
+            add_elevated_views(database, folder.name, views, use_masks)
             learnt.append(folder.name)
     return learnt
 

@@ -39,6 +39,7 @@ def db_add(
     """Learn an object from training images (a transaction: all or nothing)."""
     from scenespeak.cleantext import check_label
     from scenespeak.perception.recognition import ObjectDatabase
+    from scenespeak.perception.recognition.elevated import add_elevated_views
 
     check_label(label)
     masks = list(mask) if mask else None
@@ -50,6 +51,7 @@ def db_add(
         ObjectDatabase.open(db) as database,
     ):
         info = database.add_object(label, images, masks=masks, replace=replace)
+        add_elevated_views(database, info.label, images, masks)
     _echo(f"added {info.label!r}: {info.views} view(s), {info.descriptors} descriptors")
 
 

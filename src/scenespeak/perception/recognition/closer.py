@@ -58,6 +58,14 @@ from scenespeak.perception.scene_regions import detection_confidence
 
 __all__ = ["CloserOptions", "closer_look", "coverage", "object_region"]
 
+#: The closer look's views from above (:mod:`~scenespeak.perception.recognition.elevated`)
+#: have their own veto: a region of at least ``MIN_KEYPOINTS`` keypoints of which less than
+#: ``MIN_VOTES`` passed the ratio test for the name is not its texture (the first look's
+#: :meth:`~scenespeak.perception.known_evidence.KeypointEvidence.refuses`, with this look's
+#: votes: the first look's are few by nature where the views from above are needed).
+MIN_KEYPOINTS, MIN_VOTES = 30, 0.05
+_ABOVE = "a view from above"
+
 
 @dataclass(frozen=True)
 class CloserOptions:
@@ -181,6 +189,7 @@ class _Look:
     named: tuple[NDArray[np.float64], ...]
     look: Callable[[Features], Labelling]
     options: CloserOptions
+    elevated: Callable[[SceneObject, Features], Labelling | None] | None = None
 
     def keypoints(self, hull: NDArray[np.float64]) -> Features:
         """The enlarged box's keypoints inside the (grown) region and no named object's."""
@@ -199,15 +208,43 @@ class _Look:
             keep &= ~inside_polygon(f.xy, other)
         return f.subset(keep)
 
-    def best(self, hull: NDArray[np.float64]) -> tuple[Detection, Features] | str | None:
+    def best(
+        self, hull: NDArray[np.float64], obj: SceneObject
+    ) -> tuple[Detection, Features] | str | None:
         """The detection with most inliers among those of the object's size, or why the one
-        of its size does not cover the object (:func:`coverage`), or None."""
+        of its size does not cover the object (:func:`coverage`), or None. When the look at
+        the learnt views names nothing, the look at the views from where the camera is
+        (``elevated``, :mod:`~scenespeak.perception.recognition.elevated`) is judged alike."""
         f = self.keypoints(hull)
         if not len(f):
             return None
+        found = self._judge(self.look(f), f, hull)
+        if isinstance(found, tuple) or self.elevated is None:
+            return found
+        again = self.elevated(obj, f)
+        if again is None:
+            return found
+        second = self._judge(again, f, hull)
+        if not isinstance(second, tuple):
+            return found if found is not None else second
+        det = second[0]
+        # the first look's votes cannot speak for a view it did not have: this look's do
+        code = int(again.matched[det.inliers[0]])
+        mine = int(np.count_nonzero(again.matched == code))
+        if len(f) >= MIN_KEYPOINTS and mine < MIN_VOTES * len(f):
+            return (
+                f"not named {det.label} by a view from above: {mine} of its {len(f)} keypoints "
+                f"voted for it (< {100 * MIN_VOTES:.0f} %)"
+            )
+        return dataclasses.replace(det, model=f"{det.model}, {_ABOVE}"), f
+
+    def _judge(
+        self, labelling: Labelling, f: Features, hull: NDArray[np.float64]
+    ) -> tuple[Detection, Features] | str | None:
+        """:meth:`best` on one labelling of the region's keypoints ``f``."""
         area = abs(polygon_area(hull))
         k = self.options.area_factor
-        for det in self.look(f).detections:  # most inliers first
+        for det in labelling.detections:  # most inliers first
             carried = abs(polygon_area(det.outline_in_scene))
             if not area / k <= carried <= area * k:
                 continue
@@ -256,7 +293,8 @@ def _verdict(
     label = found[0].label
     if _piece_of(obj, label, objects):
         return obj
-    why = veto(obj, label) if veto is not None else None
+    above = found[0].model.endswith(_ABOVE)  # vetted by its own votes (MIN_VOTES)
+    why = veto(obj, label) if veto is not None and not above else None
     if why is not None:
         return dataclasses.replace(obj, notes=(*obj.notes, f"not named {label}: {why}"))
     return found
@@ -269,6 +307,7 @@ def closer_look(
     look: Callable[[Features], Labelling],
     options: CloserOptions | None = None,
     veto: Callable[[SceneObject, str], str | None] | None = None,
+    elevated: Callable[[SceneObject, Features], Labelling | None] | None = None,
 ) -> tuple[SceneObject, ...]:
     """``objects`` with the unknown ones that a closer look at their own region names renamed
     (module docstring), instances numbered ("cup", "cup 2") and the unknown ones renumbered.
@@ -288,6 +327,11 @@ def closer_look(
     veto : callable, optional
         ``veto(obj, label)``: why ``obj`` cannot be ``label`` (None: it may be); a vetoed
         object stays unknown with a note saying why.
+    elevated : callable, optional
+        ``elevated(obj, features)``: the labelling of an unknown object's region keypoints
+        against learnt views seen from where the camera sees it
+        (:class:`~scenespeak.perception.recognition.elevated.ElevatedLook`), tried when the
+        first look names nothing; None: not tried.
     """
     o = options or CloserOptions()
     gray = to_gray(np.asarray(image))
@@ -307,12 +351,12 @@ def closer_look(
         if not obj.label.startswith("unknown object")
         and (hull := object_region(obj, cam, shape)) is not None
     )
-    scene = _Look(gray, cam, named, look, o)
+    scene = _Look(gray, cam, named, look, o, elevated)
     out = list(objects)
     changed = False
     for i in _budgeted(hulls, o.budget * shape[0] * shape[1]):
         obj = out[i]
-        found = _verdict(scene.best(hulls[i]), obj, out, veto)
+        found = _verdict(scene.best(hulls[i], obj), obj, out, veto)
         if not isinstance(found, tuple):
             out[i] = found
             continue
