@@ -52,26 +52,53 @@ class _Candidates:
     nearest: NDArray[np.int64]  # per query: its nearest training descriptor (-1: none)
 
 
+def _second_distance(
+    db: _Loaded, first_obj: NDArray[np.int32], dist: NDArray[np.float32], ids: NDArray[np.int64]
+) -> tuple[NDArray[np.float32], NDArray[np.bool_]]:
+    """Per query: the squared distance to its nearest fetched descriptor of an object other
+    than ``first_obj`` and whether one was fetched; where none was, the deepest finite fetched
+    distance (a lower bound of that distance)."""
+    nq = len(first_obj)
+    obj = np.where(ids >= 0, db.object_of[np.maximum(ids, 0)], -1)
+    other = (obj != first_obj[:, None]) & (ids >= 0)
+    has_other = other.any(axis=1)
+    j2 = np.argmax(other, axis=1)
+    deepest = np.max(np.where(np.isfinite(dist), dist, -np.inf), axis=1)
+    d2 = np.where(has_other, dist[np.arange(nq), j2], deepest)
+    return d2.astype(np.float32), has_other
+
+
 def _ratio_candidates(db: _Loaded, features: Features, o: LabelOptions) -> _Candidates:
     """The ratio test against the nearest descriptor of another object, and the candidates.
+
+    Lowe (IJCV 2004, sec. 7.1) compares the nearest distance with the nearest *of another
+    object*: that one is a false match, and its distance estimates how dense false matches are
+    round the query. When all ``k`` fetched neighbours belong to the nearest's object, the
+    ``k``-th distance is only a lower bound of it: an object learnt from many near-identical
+    descriptors (several views, synthesised views) has a query's ``k`` neighbours all its own,
+    and the test against the bound fails queries whose true test passes. Those queries alone
+    (the bound decides every other one) are searched again ``deep_k`` deep; a query whose
+    ``deep_k`` neighbours are still all of one object is tested against the deepest distance.
 
     For a query that passed, every fetched neighbour of the same object that passes the ratio
     test too (its copies in the object's other views: the same surface point seen from another
     side or distance), the nearest per view. Each training view is then checked with all the
     queries that match into it, not only those whose single nearest neighbour lies in it.
     """
-    nq = len(features)
     kk = max(2, min(o.k, db.index.ntotal))
     dist, ids = db.index.search(features.descriptors, kk)
     valid = ids[:, 0] >= 0
     first_obj = np.where(valid, db.object_of[np.maximum(ids[:, 0], 0)], -1)
-    obj = np.where(ids >= 0, db.object_of[np.maximum(ids, 0)], -1)
-    other = (obj != first_obj[:, None]) & (ids >= 0)
-    has_other = other.any(axis=1)
-    j2 = np.argmax(other, axis=1)
-    d2 = np.where(has_other, dist[np.arange(nq), j2], dist[:, -1])
-    limit = (o.ratio * o.ratio) * d2
+    d2, has_other = _second_distance(db, first_obj, dist, ids)
+    r2 = o.ratio * o.ratio
+    deep = min(o.deep_k, db.index.ntotal)
+    again = np.flatnonzero(valid & ~has_other & (dist[:, 0] >= r2 * d2))
+    if deep > kk and len(again):
+        dist_a, ids_a = db.index.search(features.descriptors[again], deep)
+        d2[again], _ = _second_distance(db, first_obj[again], dist_a, ids_a)
+    limit = r2 * d2
     passed = valid & (dist[:, 0] < limit)
+    obj = np.where(ids >= 0, db.object_of[np.maximum(ids, 0)], -1)
     cand = passed[:, None] & (obj == first_obj[:, None]) & (ids >= 0) & (dist < limit[:, None])
     rows, cols = np.nonzero(cand)  # row-major: nearest first within each query
     t_all = ids[rows, cols]
