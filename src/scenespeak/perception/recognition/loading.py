@@ -31,7 +31,13 @@ from scenespeak.perception.recognition.schema import cached_quantiser, save_quan
 if TYPE_CHECKING:
     from scenespeak.perception.recognition.store import ObjectDatabase
 
-__all__ = ["descriptor_chunks", "index_of", "read_colour_models", "read_views"]
+__all__ = [
+    "descriptor_chunks",
+    "index_of",
+    "read_colour_models",
+    "read_views",
+    "synthetic_of",
+]
 
 
 _SELECT_VIEWS = " FROM views v JOIN objects o ON o.id = v.object_id ORDER BY v.id"
@@ -80,6 +86,16 @@ def read_views(
     if s != total:
         raise DatabaseError(db.path, "is corrupt (views without an object)")
     return kp, object_of, view_of, sizes, labels, outlines
+
+
+def synthetic_of(db: ObjectDatabase, view_of: NDArray[np.int32]) -> NDArray[np.bool_] | None:
+    """Per descriptor (its view ``view_of``): whether its view was synthesised at ``db add``
+    (:func:`~scenespeak.perception.recognition.views.raised_views`, told by its source's
+    ending); None when no view was."""
+    from scenespeak.perception.recognition.views import RAISED_SOURCE
+
+    rows = db._query("SELECT id FROM views WHERE source LIKE ?", ("%" + RAISED_SOURCE,))
+    return np.isin(view_of, [int(r[0]) for r in rows]) if rows else None
 
 
 def descriptor_chunks(db: ObjectDatabase, sizes: list[int]) -> Iterator[NDArray[np.uint8]]:

@@ -28,6 +28,12 @@ MaskLike = str | PathLike[str] | NDArray[np.generic] | None
 # --------------------------------------------------------------------------------------------
 
 
+#: How the source of a synthesised view ends (``"view_00.png seen 18 degrees higher"``): the
+#: labelling tells these views by it (:func:`~scenespeak.perception.recognition.loading.
+#: synthetic_of`), so no schema change was needed.
+RAISED_SOURCE = " degrees higher"
+
+
 def outline_from_mask(mask: NDArray[np.generic], *, tolerance: float = 1.0) -> NDArray[np.float32]:
     """Outline of the largest region of a mask, as a simplified polygon.
 
@@ -203,7 +209,7 @@ def raised_views(
         if len(feats) == 0:
             continue
         h, w = view.shape[:2]
-        source = f"{_source_name(images[i], i, 'image')} seen {raise_deg:g} degrees higher"
+        source = f"{_source_name(images[i], i, 'image')} seen {raise_deg:g}{RAISED_SOURCE}"
         out.append(_ViewData(source, w, h, True, feats, outline_from_mask(vmask)))
     return out
 
