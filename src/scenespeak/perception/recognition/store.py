@@ -283,7 +283,7 @@ class ObjectDatabase:
         max_features: int = 0,
         contrast_threshold: float = 0.02,
         progress: Progress | None = None,
-        raise_cylinders: bool = True,
+        raise_cylinders: bool = False,
     ) -> ObjectInfo:
         """Learn an object from training images and store it, in one transaction.
 
@@ -311,7 +311,7 @@ class ObjectDatabase:
             Called as ``progress(stage, done, total)`` with stage ``"extract"`` (per image,
             before anything is written) and ``"store"`` (per view written).
         raise_cylinders : bool
-            True — a cylinder also gets views from 18° and 32° higher (``docs/database.md``).
+            False — True: a cylinder also gets views from 18° and 32° higher (opt-in).
 
         Returns
         -------
