@@ -33,7 +33,14 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["Cylinder", "cylinder_of", "elevated_views", "view_from"]
+__all__ = [
+    "Cylinder",
+    "cylinder_of",
+    "elevated_views",
+    "raised_cylinders",
+    "source_rows",
+    "view_from",
+]
 
 #: How much higher (degrees) the synthesised views are seen from than the training view.
 RAISES = (18.0, 32.0)
@@ -143,14 +150,13 @@ def _rows_along(
     return src, dst, t[:, 0]
 
 
-def view_from(
-    image: NDArray[np.generic], cyl: Cylinder, raise_deg: float
-) -> tuple[NDArray[np.generic], NDArray[np.bool_]]:
-    """The view of ``cyl`` (in ``image``) from ``raise_deg`` degrees higher, and its mask: the
-    body remapped per column (module docstring), the top face stretched, the rest the image's
-    border colour (a plain background). The bottom rim's centre stays where it was."""
-    img = np.asarray(image)
-    h, w = img.shape[:2]
+def source_rows(
+    shape: tuple[int, int], cyl: Cylinder, raise_deg: float
+) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+    """Per pixel of the view of ``cyl`` from ``raise_deg`` degrees higher (an image of
+    ``shape``): the row of the training view it comes from (the same column; -1 off the
+    object), and the object's pixels (module docstring)."""
+    h, w = shape
     u = np.arange(w, dtype=np.float64)
     sn = (u - cyl.c) / cyl.r
     inside = np.abs(sn) < 0.98
@@ -172,8 +178,22 @@ def view_from(
         face = ~on & (np.abs(rows - centre1[x]) <= cyl.r * s_top1 * cos[x])
         map_v[face, x] = centre0[x] + (rows[face] - centre1[x]) * (s_top0 / s_top1)
         body[face, x] = True
+    return map_v, body
+
+
+def view_from(
+    image: NDArray[np.generic], cyl: Cylinder, raise_deg: float
+) -> tuple[NDArray[np.generic], NDArray[np.bool_]]:
+    """The view of ``cyl`` (in ``image``) from ``raise_deg`` degrees higher, and its mask: the
+    body remapped per column (module docstring, :func:`source_rows`), the top face stretched,
+    the rest the image's border colour (a plain background). The bottom rim's centre stays
+    where it was."""
+    img = np.asarray(image)
+    h, w = img.shape[:2]
+    map_v, body = source_rows((h, w), cyl, raise_deg)
     border = np.concatenate([img[0], img[-1], img[:, 0], img[:, -1]]).reshape(-1, *img.shape[2:])
     fill = np.median(border, axis=0).astype(img.dtype)
+    u = np.arange(w, dtype=np.float32)
     map_u = np.broadcast_to(u[None, :], (h, w)).astype(np.float32)
     out = cv2.remap(img, map_u, map_v.astype(np.float32), interpolation=cv2.INTER_LINEAR)
     keep = body[..., None] if out.ndim == 3 else body
@@ -216,3 +236,14 @@ def elevated_views(
     if float(widths.max() / widths.min()) > 1.0 + width_spread:
         return []
     return [(i, d, *view_from(images[i], cy, d)) for i, cy in good for d in raises]
+
+
+def raised_cylinders(
+    masks: Sequence[NDArray[np.bool_] | None], *, width_spread: float = 0.05
+) -> list[Cylinder | None]:
+    """Each view's cylinder as :func:`elevated_views` raises it (all None: not a cylinder)."""
+    cyls = _cylinders(masks)
+    widths = np.array([cy.r for cy in cyls if cy is not None])
+    if not len(widths) or float(widths.max() / widths.min()) > 1.0 + width_spread:
+        return [None] * len(masks)
+    return cyls

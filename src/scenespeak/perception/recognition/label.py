@@ -18,6 +18,8 @@ from scenespeak.geometry.polygons import points_in_polygon
 from scenespeak.perception.features import Features
 from scenespeak.perception.recognition.index import DescriptorIndex
 from scenespeak.perception.recognition.options import LabelOptions
+from scenespeak.perception.recognition.ratio import Candidates as _Candidates
+from scenespeak.perception.recognition.ratio import ratio_candidates as _ratio_candidates
 from scenespeak.perception.recognition.results import Detection, Labelling
 from scenespeak.perception.recognition.verify import _apply_h, _fit_view, _Keys, _small_enough
 
@@ -38,131 +40,6 @@ class _Loaded:
     labels: dict[int, str]
     outlines: dict[int, NDArray[np.float32]]
     synthetic: NDArray[np.bool_] | None = None  # per descriptor: of a synthesised view
-
-
-@dataclass(frozen=True)
-class _Candidates:
-    """The correspondences that passed the ratio test: query ``q_idx[i]`` ↔ training
-    descriptor ``t_idx[i]`` in view ``view[i]``; ``first_obj`` is each query's object."""
-
-    q_idx: NDArray[np.intp]
-    t_idx: NDArray[np.int64]
-    view: NDArray[np.int32]
-    first_obj: NDArray[np.int32]
-    passed: NDArray[np.bool_]
-    nearest: NDArray[np.int64]  # per query: its nearest training descriptor (-1: none)
-
-
-def _first(mask: NDArray[np.bool_]) -> tuple[NDArray[np.bool_], NDArray[np.intp]]:
-    """Per row: whether ``mask`` holds a True, and the column of the first one."""
-    return np.asarray(mask.any(axis=1), bool), np.argmax(mask, axis=1).astype(np.intp)
-
-
-@dataclass(frozen=True)
-class _Test:
-    """The ratio test of a block of queries: which passed, the object each is matched to, its
-    squared distance limit, and which failed only against a lower bound (undecided)."""
-
-    passed: NDArray[np.bool_]
-    first_obj: NDArray[np.int32]
-    limit: NDArray[np.float32]
-    undecided: NDArray[np.bool_]
-
-
-def _one_test(
-    dist: NDArray[np.float32],
-    obj: NDArray[np.int32],
-    first: NDArray[np.bool_],
-    others: NDArray[np.bool_],
-    r2: float,
-) -> tuple[NDArray[np.bool_], NDArray[np.int32], NDArray[np.float32], NDArray[np.bool_]]:
-    """Ratio test of each row's first neighbour among ``first`` against its nearest neighbour
-    among ``others`` of another object (or, when none was fetched, the deepest fetched
-    distance: a lower bound). Returns passed, the object, the limit and undecided."""
-    rows = np.arange(len(dist))
-    has1, j1 = _first(first)
-    obj1 = np.where(has1, obj[rows, j1], -1).astype(np.int32)
-    has2, j2 = _first(others & (obj != obj1[:, None]))
-    deepest = np.max(np.where(others & np.isfinite(dist), dist, -np.inf), axis=1)
-    limit = (r2 * np.where(has2, dist[rows, j2], deepest)).astype(np.float32)
-    passed = has1 & (dist[rows, j1] < limit)
-    fetched = others.any(axis=1)
-    return passed, obj1, limit, fetched & ~passed & ~(has1 & has2)
-
-
-def _test(db: _Loaded, dist: NDArray[np.float32], ids: NDArray[np.int64], r2: float) -> _Test:
-    """The ratio test (Lowe 2004, sec. 7.1) of queries with neighbours ``dist``, ``ids``.
-
-    A query's nearest *learnt* descriptor is tested against the nearest learnt descriptor of
-    another object, as without synthesised views. A query that fails may pass on its nearest
-    *synthesised* descriptor (:mod:`~scenespeak.perception.recognition.cylinder_views`),
-    tested against every descriptor of another object, synthesised ones included. So views
-    synthesised for one object never fail another object's matches (a blurred, stretched
-    view's descriptors lie near many queries), and its own matches meet all the competition.
-    """
-    ok = ids >= 0
-    obj = np.where(ok, db.object_of[np.maximum(ids, 0)], -1).astype(np.int32)
-    syn = ok & db.synthetic[np.maximum(ids, 0)] if db.synthetic is not None else ok & False
-    pass_r, obj_r, lim_r, und_r = _one_test(dist, obj, ok & ~syn, ok & ~syn, r2)
-    if not syn.any():
-        return _Test(pass_r, obj_r, lim_r, und_r)
-    pass_s, obj_s, lim_s, und_s = _one_test(dist, obj, syn, ok, r2)
-    und_s &= syn.any(axis=1)  # no synthesised neighbour fetched: nothing to search deeper for
-    first_obj = np.where(pass_r, obj_r, np.where(pass_s, obj_s, np.where(obj_r >= 0, obj_r, obj_s)))
-    limit = np.where(pass_r, lim_r, lim_s)
-    passed = pass_r | pass_s
-    return _Test(passed, first_obj.astype(np.int32), limit, ~passed & (und_r | und_s))
-
-
-def _candidates_of(
-    db: _Loaded, t: _Test, dist: NDArray[np.float32], ids: NDArray[np.int64]
-) -> tuple[NDArray[np.intp], NDArray[np.int64]]:
-    """Per query that passed: its fetched neighbours of its object within its limit, the
-    nearest per view (rows and training descriptors)."""
-    obj = np.where(ids >= 0, db.object_of[np.maximum(ids, 0)], -1)
-    cand = t.passed[:, None] & (obj == t.first_obj[:, None]) & (ids >= 0)
-    cand &= dist < t.limit[:, None]
-    rows, cols = np.nonzero(cand)  # row-major: nearest first within each query
-    t_all = ids[rows, cols]
-    v_all = db.view_of[t_all].astype(np.int64)
-    key = rows.astype(np.int64) * (int(db.view_of.max()) + 1) + v_all
-    _, first = np.unique(key, return_index=True)
-    return rows[first].astype(np.intp), t_all[first]
-
-
-def _ratio_candidates(db: _Loaded, features: Features, o: LabelOptions) -> _Candidates:
-    """The ratio test against the nearest descriptor of another object, and the candidates.
-
-    Lowe (IJCV 2004, sec. 7.1) compares the nearest distance with the nearest *of another
-    object*: that one is a false match, and its distance estimates how dense false matches are
-    round the query. When all ``k`` fetched neighbours belong to the nearest's object, the
-    ``k``-th distance is only a lower bound of it: an object learnt from many near-identical
-    descriptors (several views, synthesised views) has a query's ``k`` neighbours all its own,
-    and the test against the bound fails queries whose true test passes. Those queries alone
-    (the bound decides every other one) are searched again ``deep_k`` deep; a query whose
-    ``deep_k`` neighbours are still all of one object is tested against the deepest distance.
-    Synthesised views take part as :func:`_test` says.
-
-    For a query that passed, every fetched neighbour of the same object that passes the ratio
-    test too (its copies in the object's other views: the same surface point seen from another
-    side or distance), the nearest per view. Each training view is then checked with all the
-    queries that match into it, not only those whose single nearest neighbour lies in it.
-    """
-    kk = max(2, min(o.k, db.index.ntotal))
-    r2 = o.ratio * o.ratio
-    dist, ids = db.index.search(features.descriptors, kk)
-    t = _test(db, dist, ids, r2)
-    q_idx, t_idx = _candidates_of(db, t, dist, ids)
-    deep = min(o.deep_k, db.index.ntotal)
-    again = np.flatnonzero(t.undecided)
-    if deep > kk and len(again):
-        dist_a, ids_a = db.index.search(features.descriptors[again], deep)
-        ta = _test(db, dist_a, ids_a, r2)
-        t.passed[again], t.first_obj[again], t.limit[again] = ta.passed, ta.first_obj, ta.limit
-        qa, ta_idx = _candidates_of(db, ta, dist_a, ids_a)
-        q_idx = np.concatenate([q_idx, again[qa].astype(np.intp)])
-        t_idx = np.concatenate([t_idx, ta_idx])
-    return _Candidates(q_idx, t_idx, db.view_of[t_idx], t.first_obj, t.passed, ids[:, 0])
 
 
 def _detect_in_view(

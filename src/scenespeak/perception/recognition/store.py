@@ -283,7 +283,7 @@ class ObjectDatabase:
         max_features: int = 0,
         contrast_threshold: float = 0.02,
         progress: Progress | None = None,
-        raise_cylinders: bool = False,
+        raise_cylinders: bool = True,
     ) -> ObjectInfo:
         """Learn an object from training images and store it, in one transaction.
 
@@ -311,7 +311,7 @@ class ObjectDatabase:
             Called as ``progress(stage, done, total)`` with stage ``"extract"`` (per image,
             before anything is written) and ``"store"`` (per view written).
         raise_cylinders : bool
-            False — True: a cylinder also gets views from 18° and 32° higher (opt-in).
+            True — a cylinder also gets views from 18° and 32° higher (``docs/database.md``).
 
         Returns
         -------
@@ -459,7 +459,7 @@ class ObjectDatabase:
         total = int(counts[1])
         kp, object_of, view_of, sizes, labels, outlines = read_views(self, total)
         index = index_of(self, gen, total, sizes, nprobe, seed)
-        syn = synthetic_of(self, view_of)
+        syn, view_of = synthetic_of(self, view_of)
         self._loaded = _Loaded(
             gen, index, object_of, view_of, kp[:, :2], kp[:, 2], kp[:, 3], labels, outlines, syn
         )
