@@ -117,3 +117,23 @@ def test_a_synthesised_match_meets_every_other_object(learnt: int, passes: bool)
     assert bool(c.passed[0]) is passes
     if passes:
         assert int(c.first_obj[0]) == 1
+
+
+def test_the_inverted_files_cells_are_learnt_from_the_learnt_descriptors_alone() -> None:
+    # Synthesised views added to a database do not move the cells the learnt descriptors fall
+    # into (loading.index_of passes the learnt ones as ``train``): the same quantiser as
+    # without them, so the same approximate neighbours are missed.
+    from scenespeak.perception.recognition.ivf import IVFIndex
+
+    rng = np.random.default_rng(3)
+    learnt = rng.integers(0, 255, (3000, 128), dtype=np.uint8)
+    synthesised = rng.integers(0, 120, (1500, 128), dtype=np.uint8)
+    both = np.concatenate([learnt, synthesised])
+    alone = IVFIndex(learnt, nlist=16)
+    pooled = IVFIndex.from_chunks(
+        lambda: iter([both]), len(both), nlist=16, train=(lambda: iter([learnt]), len(learnt))
+    )
+    untrained = IVFIndex(both, nlist=16)
+    assert np.array_equal(pooled.centroids, alone.centroids)
+    assert not np.array_equal(untrained.centroids, alone.centroids)
+    assert pooled.ntotal == len(both)

@@ -185,17 +185,6 @@ def ratio_candidates(db: _Loaded, features: Features, o: LabelOptions) -> Candid
     ld, li = _learnt_only(dist, ids, (ids >= 0) & ~is_syn)
     t = _learnt_test(db, ld[:, :kk], li[:, :kk], r2, kk)
     q_idx, t_idx = _candidates_of(db, t, ld[:, :kk], li[:, :kk])
-    if n_syn:
-        s = _synthesised_test(db, dist, ids, is_syn, r2)
-        s = _Test(s.passed & ~t.passed, s.first_obj, s.limit, s.undecided)
-        qs, ts = _candidates_of(db, s, dist, ids)
-        q_idx, t_idx = np.concatenate([q_idx, qs]), np.concatenate([t_idx, ts])
-        t = _Test(
-            t.passed | s.passed,
-            np.where(s.passed, s.first_obj, t.first_obj).astype(np.int32),
-            np.where(s.passed, s.limit, t.limit).astype(np.float32),
-            t.undecided & ~s.passed,
-        )
     again = np.flatnonzero(t.undecided)
     deep = min(max(o.deep_k, fetch), db.index.ntotal)
     if deep > fetch and len(again):
@@ -206,7 +195,24 @@ def ratio_candidates(db: _Loaded, features: Features, o: LabelOptions) -> Candid
         da, ia = _learnt_only(da, ia, learnt)
         ta = _learnt_test(db, da, ia, r2, kk)
         t.passed[again], t.first_obj[again], t.limit[again] = ta.passed, ta.first_obj, ta.limit
+        # candidates among the first k learnt neighbours, as above, and beyond them only for
+        # one point's copies in more than k views (no view repeated among the first k)
+        obj = _objects(db, ia[:, :kk])
+        same = (ia[:, :kk] >= 0) & (obj == obj[:, :1])
+        copies = ~_repeats(db.view_of[np.maximum(ia[:, :kk], 0)], same)
+        ia = np.where(copies[:, None] | (np.arange(ia.shape[1]) < kk)[None, :], ia, -1)
         qa, tb = _candidates_of(db, ta, da, ia)
         q_idx = np.concatenate([q_idx, again[qa].astype(np.intp)])
         t_idx = np.concatenate([t_idx, tb])
+    if n_syn:  # the synthesised test, for the queries the learnt one failed
+        s = _synthesised_test(db, dist, ids, is_syn, r2)
+        s = _Test(s.passed & ~t.passed, s.first_obj, s.limit, s.undecided)
+        qs, ts = _candidates_of(db, s, dist, ids)
+        q_idx, t_idx = np.concatenate([q_idx, qs]), np.concatenate([t_idx, ts])
+        t = _Test(
+            t.passed | s.passed,
+            np.where(s.passed, s.first_obj, t.first_obj).astype(np.int32),
+            np.where(s.passed, s.limit, t.limit).astype(np.float32),
+            t.undecided,
+        )
     return Candidates(q_idx, t_idx, db.view_of[t_idx], t.first_obj, t.passed, ids[:, 0])
