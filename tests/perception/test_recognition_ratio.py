@@ -108,11 +108,11 @@ def test_another_objects_synthesised_view_does_not_fail_a_learnt_match() -> None
 @pytest.mark.parametrize(("learnt", "passes"), [(40, True), (22, False)])
 def test_a_synthesised_match_meets_every_other_object(learnt: int, passes: bool) -> None:
     # Object 1's synthesised descriptor is the nearest, at 20 (400); object 0's learnt one at
-    # ``learnt``. Learnt against learnt decides nothing (no other object has a learnt one), so
-    # the synthesised match decides, against every other object: 400 < 0.64 * 1600 passes
-    # for object 1, 400 < 0.64 * 484 does not.
-    desc = np.array([_at(BASE, 0, 20), _at(BASE, 1, learnt)], np.uint8)
-    db = _loaded(desc, [1, 0], synthetic=[True, False])
+    # ``learnt``, object 2's just beyond it: the learnt test fails (two objects alike). The
+    # synthesised match decides, against every other object: 400 < 0.64 * 1600 passes for
+    # object 1, 400 < 0.64 * 484 does not.
+    desc = np.array([_at(BASE, 0, 20), _at(BASE, 1, learnt), _at(BASE, 2, learnt + 1)], np.uint8)
+    db = _loaded(desc, [1, 0, 2], synthetic=[True, False, False])
     c = _ratio_candidates(db, _query(BASE[None].astype(np.uint8)), LabelOptions())
     assert bool(c.passed[0]) is passes
     if passes:

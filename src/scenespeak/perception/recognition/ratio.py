@@ -108,24 +108,32 @@ def _learnt_test(
     db: _Loaded, dist: NDArray[np.float32], ids: NDArray[np.int64], r2: float, k: int
 ) -> _Test:
     """The test on learnt neighbours only (``dist``, ``ids``: nearest first, -1 / inf when
-    missing); ``k`` as in the module docstring. Wider than ``k``: the deeper search."""
+    missing) over the first ``k`` of them, as without synthesised views: the nearest other
+    object's among them, else the ``k``-th distance (inf when fewer were fetched). When the
+    ``k`` are all of one object and in ``k`` different views, the lists wider than ``k``
+    (the deeper search) give the nearest other object's or the first descriptor from a view
+    already seen. Undecided (to search deeper): fewer than ``k`` learnt neighbours fetched
+    (synthesised ones took their places), or such copies that fail."""
     rows = np.arange(len(dist))
     ok = ids >= 0
     obj = _objects(db, ids)
     obj1 = obj[:, 0]
-    has2, j2 = _first(ok & (obj != obj1[:, None]))
+    other = ok & (obj != obj1[:, None])
+    head = min(k, ids.shape[1])
+    has2, j2 = _first(other[:, :head])
     same = ok & (obj == obj1[:, None])
     views = db.view_of[np.maximum(ids, 0)]
-    head = min(k, ids.shape[1])
-    crowd = _repeats(views[:, :head], same[:, :head]) & ok[:, head - 1] & (head == k)
-    deepest = np.max(np.where(ok, dist, -np.inf), axis=1)
-    stand = deepest
-    if ids.shape[1] > k:  # the deeper search: the first descriptor of a view already seen
-        stand = np.minimum(stand, _first_repeat(dist, views, same))
-    stand = np.where(crowd, dist[:, head - 1], stand)
-    limit = (r2 * np.where(has2, dist[rows, j2], stand)).astype(np.float32)
+    full = ok[:, head - 1] & (head == k)
+    copies = full & ~has2 & ~_repeats(views[:, :head], same[:, :head])
+    d2 = np.where(has2, dist[rows, j2], dist[:, head - 1])
+    if ids.shape[1] > k:  # the deeper search, for one point's copies
+        far, jf = _first(other)
+        beyond = np.minimum(np.where(far, dist[rows, jf], np.inf), _first_repeat(dist, views, same))
+        deepest = np.max(np.where(ok, dist, -np.inf), axis=1)
+        d2 = np.where(copies, np.where(np.isfinite(beyond), beyond, deepest), d2)
+    limit = (r2 * d2).astype(np.float32)
     passed = ok[:, 0] & (dist[:, 0] < limit)
-    undecided = ok[:, 0] & ~passed & ~has2 & ~crowd & (ids.shape[1] <= k)
+    undecided = ok[:, 0] & (~full | (copies & ~passed)) & (ids.shape[1] <= k)
     return _Test(passed, obj1, limit, undecided)
 
 
@@ -184,7 +192,8 @@ def ratio_candidates(db: _Loaded, features: Features, o: LabelOptions) -> Candid
     is_syn = (ids >= 0) & (syn[np.maximum(ids, 0)] if syn is not None else False)
     ld, li = _learnt_only(dist, ids, (ids >= 0) & ~is_syn)
     t = _learnt_test(db, ld[:, :kk], li[:, :kk], r2, kk)
-    q_idx, t_idx = _candidates_of(db, t, ld[:, :kk], li[:, :kk])
+    decided = _Test(t.passed & ~t.undecided, t.first_obj, t.limit, t.undecided)
+    q_idx, t_idx = _candidates_of(db, decided, ld[:, :kk], li[:, :kk])
     again = np.flatnonzero(t.undecided)
     deep = min(max(o.deep_k, fetch), db.index.ntotal)
     if deep > fetch and len(again):
