@@ -14,10 +14,12 @@ dense false matches are round the query. Two refinements (issue 10, session 10):
   database of few objects has all ``k`` neighbours on the largest object, several per view).
 - **Synthesised views** (:mod:`~scenespeak.perception.recognition.cylinder_views`). A query's
   nearest *learnt* descriptor is tested against learnt descriptors only, over the first ``k``
-  learnt neighbours: exactly the test without synthesised views. A query that fails may pass
-  on its nearest *synthesised* descriptor, tested against every descriptor of another object,
-  synthesised ones included. So one object's synthesised views never fail another object's
-  matches, and its own matches meet all the competition.
+  learnt neighbours: exactly the test without synthesised views, with the same candidates
+  (enough neighbours are fetched that ``k`` are learnt where synthesised ones are as dense as
+  overall; a query with fewer is searched again). A query that fails may then pass on its
+  nearest *synthesised* descriptor, tested against every descriptor of another object,
+  synthesised ones included. So one object's synthesised views never fail or change another
+  object's matches, and its own synthesised matches meet all the competition.
 """
 
 from __future__ import annotations
