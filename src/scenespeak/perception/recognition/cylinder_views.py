@@ -33,7 +33,14 @@ import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["Cylinder", "cylinder_of", "elevated_views", "view_from"]
+__all__ = [
+    "Cylinder",
+    "cylinder_of",
+    "elevated_views",
+    "raised_cylinders",
+    "source_rows",
+    "view_from",
+]
 
 #: How much higher (degrees) the synthesised views are seen from than the training view.
 RAISES = (18.0, 32.0)
@@ -62,14 +69,19 @@ def _extents(mask: NDArray[np.bool_]) -> tuple[NDArray[np.intp], NDArray[np.intp
     return low, high
 
 
-def cylinder_of(mask: NDArray[np.bool_], *, max_residual: float = 2.0) -> Cylinder | None:
+def cylinder_of(
+    mask: NDArray[np.bool_], *, max_residual: float = 2.0, sin_top: float | None = None
+) -> Cylinder | None:
     """The cylinder a view's object mask is the silhouette of, or None.
 
     Over the columns within 0.9 r of the centre (``cos φ = sqrt(1 − ((u − c) / r)²)``) the
     bottom edge ``row = v_b + k_b·cos φ`` and the top edge ``row = v_t − k_t·cos φ`` are fitted
     by least squares (``k = r·sin e``). None when the fit is off by more than ``max_residual``
     pixels (RMS), either ``sin e`` is outside 0.05–0.8 (a flat edge: a box's face, or a view
-    from level), or the mask is less than 12 pixels wide.
+    from level), or the mask is less than 12 pixels wide. With ``sin_top`` (the top rim's
+    elevation from the object's other views), ``k_t`` is that and only the bottom edge must
+    fit: a mask that left out part of the top face (a plain top like the background) has a
+    ragged, flat top edge.
 
     Examples
     --------
@@ -83,6 +95,12 @@ def cylinder_of(mask: NDArray[np.bool_], *, max_residual: float = 2.0) -> Cylind
     >>> box = np.zeros((200, 200), bool); box[50:150, 60:140] = True
     >>> cylinder_of(box) is None  # flat edges: a box's face
     True
+    >>> flat_top = m.copy(); flat_top[:56] = False  # the top face left out of the mask
+    >>> cylinder_of(flat_top) is None
+    True
+    >>> cyl = cylinder_of(flat_top, sin_top=0.16)
+    >>> round(cyl.sin_bottom, 2), round(cyl.bottom)
+    (0.3, 150)
     """
     m = np.asarray(mask, bool)
     cols = np.flatnonzero(m.any(axis=0))
@@ -98,8 +116,15 @@ def cylinder_of(mask: NDArray[np.bool_], *, max_residual: float = 2.0) -> Cylind
     a[:n, 0], a[:n, 2] = 1.0, cos
     a[n:, 1], a[n:, 3] = 1.0, -cos
     b = np.concatenate([low[u], high[u]]).astype(np.float64)
-    sol, *_ = np.linalg.lstsq(a, b, rcond=None)
-    rms = float(np.sqrt(np.mean((a @ sol - b) ** 2)))
+    if sin_top is None:
+        sol, *_ = np.linalg.lstsq(a, b, rcond=None)
+        res = a @ sol - b
+    else:  # k_t known: v_t is the top edge's mean offset, only the bottom must fit
+        sol, *_ = np.linalg.lstsq(a[:n][:, [0, 2]], b[:n], rcond=None)
+        res = a[:n][:, [0, 2]] @ sol - b[:n]
+        k_t = sin_top * r
+        sol = np.array([sol[0], float(np.mean(high[u] + k_t * cos)), sol[1], k_t])
+    rms = float(np.sqrt(np.mean(res**2)))
     sb, st = float(sol[2]) / r, float(sol[3]) / r
     if rms > max_residual or not (0.05 <= sb <= 0.8 and 0.05 <= st <= 0.8):
         return None
@@ -125,14 +150,13 @@ def _rows_along(
     return src, dst, t[:, 0]
 
 
-def view_from(
-    image: NDArray[np.generic], cyl: Cylinder, raise_deg: float
-) -> tuple[NDArray[np.generic], NDArray[np.bool_]]:
-    """The view of ``cyl`` (in ``image``) from ``raise_deg`` degrees higher, and its mask: the
-    body remapped per column (module docstring), the top face stretched, the rest the image's
-    border colour (a plain background). The bottom rim's centre stays where it was."""
-    img = np.asarray(image)
-    h, w = img.shape[:2]
+def source_rows(
+    shape: tuple[int, int], cyl: Cylinder, raise_deg: float
+) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+    """Per pixel of the view of ``cyl`` from ``raise_deg`` degrees higher (an image of
+    ``shape``): the row of the training view it comes from (the same column; -1 off the
+    object), and the object's pixels (module docstring)."""
+    h, w = shape
     u = np.arange(w, dtype=np.float64)
     sn = (u - cyl.c) / cyl.r
     inside = np.abs(sn) < 0.98
@@ -154,12 +178,41 @@ def view_from(
         face = ~on & (np.abs(rows - centre1[x]) <= cyl.r * s_top1 * cos[x])
         map_v[face, x] = centre0[x] + (rows[face] - centre1[x]) * (s_top0 / s_top1)
         body[face, x] = True
+    return map_v, body
+
+
+def view_from(
+    image: NDArray[np.generic], cyl: Cylinder, raise_deg: float
+) -> tuple[NDArray[np.generic], NDArray[np.bool_]]:
+    """The view of ``cyl`` (in ``image``) from ``raise_deg`` degrees higher, and its mask: the
+    body remapped per column (module docstring, :func:`source_rows`), the top face stretched,
+    the rest the image's border colour (a plain background). The bottom rim's centre stays
+    where it was."""
+    img = np.asarray(image)
+    h, w = img.shape[:2]
+    map_v, body = source_rows((h, w), cyl, raise_deg)
     border = np.concatenate([img[0], img[-1], img[:, 0], img[:, -1]]).reshape(-1, *img.shape[2:])
     fill = np.median(border, axis=0).astype(img.dtype)
+    u = np.arange(w, dtype=np.float32)
     map_u = np.broadcast_to(u[None, :], (h, w)).astype(np.float32)
     out = cv2.remap(img, map_u, map_v.astype(np.float32), interpolation=cv2.INTER_LINEAR)
     keep = body[..., None] if out.ndim == 3 else body
     return np.where(keep, out, fill).astype(img.dtype), body
+
+
+def _cylinders(masks: Sequence[NDArray[np.bool_] | None]) -> list[Cylinder | None]:
+    """Each view's cylinder (:func:`cylinder_of`) when most views (at least 3 and 60 %) are a
+    cylinder's silhouette, and then also the views whose top edge alone does not fit, with the
+    others' median top elevation (``sin_top``); all None otherwise."""
+    cyls = [None if m is None else cylinder_of(np.asarray(m, bool)) for m in masks]
+    good = [cy for cy in cyls if cy is not None]
+    if len(good) < max(3, 0.6 * len(masks)):
+        return [None] * len(masks)
+    top = float(np.median([cy.sin_top for cy in good]))
+    return [
+        cy if cy is not None or m is None else cylinder_of(np.asarray(m, bool), sin_top=top)
+        for cy, m in zip(cyls, masks, strict=True)
+    ]
 
 
 def elevated_views(
@@ -171,20 +224,26 @@ def elevated_views(
 ) -> list[tuple[int, float, NDArray[np.generic], NDArray[np.bool_]]]:
     """Synthesised views ``(view index, degrees raised, image, mask)`` of an object that is
     a cylinder: most of its views (at least 3 and 60 %) are a cylinder's silhouette
-    (:func:`cylinder_of`) and those are the same width within ``width_spread`` (a box's width
-    changes with the side it shows); [] otherwise. Only those views are raised."""
-    cyls = [None if m is None else cylinder_of(np.asarray(m, bool)) for m in masks]
-    good = [i for i, cy in enumerate(cyls) if cy is not None]
-    if len(good) < max(3, 0.6 * len(images)):
+    (:func:`cylinder_of`; then also those whose top edge alone does not fit, the top face left
+    out of the mask, :func:`_cylinders`) and those are the same width within ``width_spread``
+    (a box's width changes with the side it shows); [] otherwise. Only those views are
+    raised."""
+    cyls = _cylinders(masks)
+    good = [(i, cy) for i, cy in enumerate(cyls) if cy is not None]
+    if not good:
         return []
-    widths = np.array([cyls[i].r for i in good])  # type: ignore[union-attr]
+    widths = np.array([cy.r for _, cy in good])
     if float(widths.max() / widths.min()) > 1.0 + width_spread:
         return []
-    out = []
-    for i in good:
-        cy = cyls[i]
-        assert cy is not None
-        for d in raises:
-            view, mask = view_from(images[i], cy, d)
-            out.append((i, d, view, mask))
-    return out
+    return [(i, d, *view_from(images[i], cy, d)) for i, cy in good for d in raises]
+
+
+def raised_cylinders(
+    masks: Sequence[NDArray[np.bool_] | None], *, width_spread: float = 0.05
+) -> list[Cylinder | None]:
+    """Each view's cylinder as :func:`elevated_views` raises it (all None: not a cylinder)."""
+    cyls = _cylinders(masks)
+    widths = np.array([cy.r for cy in cyls if cy is not None])
+    if not len(widths) or float(widths.max() / widths.min()) > 1.0 + width_spread:
+        return [None] * len(masks)
+    return cyls

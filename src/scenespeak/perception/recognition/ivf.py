@@ -35,6 +35,7 @@ class _QuantiserOptions:
     seed: int = 0
     centroids: NDArray[np.float32] | None = None
     cells: NDArray[np.integer] | None = None
+    train: tuple[Callable[[], Iterator[NDArray[np.uint8]]], int] | None = None
 
 
 _QUANTISER = tuple(f.name for f in fields(_QuantiserOptions))
@@ -79,8 +80,8 @@ class _IndexBuilder:
             train_size=quantiser.train_size,
             iters=quantiser.iters,
             seed=quantiser.seed,
-            centroids=centroids,
-            cells=cells,
+            cached=(centroids, cells),
+            train=quantiser.train,
         )
         self.nprobe = nprobe
         self._fill(chunks, n, assign, **options)

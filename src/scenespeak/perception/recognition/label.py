@@ -18,6 +18,8 @@ from scenespeak.geometry.polygons import points_in_polygon
 from scenespeak.perception.features import Features
 from scenespeak.perception.recognition.index import DescriptorIndex
 from scenespeak.perception.recognition.options import LabelOptions
+from scenespeak.perception.recognition.ratio import Candidates as _Candidates
+from scenespeak.perception.recognition.ratio import ratio_candidates as _ratio_candidates
 from scenespeak.perception.recognition.results import Detection, Labelling
 from scenespeak.perception.recognition.verify import _apply_h, _fit_view, _Keys, _small_enough
 
@@ -37,50 +39,7 @@ class _Loaded:
     angle: NDArray[np.float32]
     labels: dict[int, str]
     outlines: dict[int, NDArray[np.float32]]
-
-
-@dataclass(frozen=True)
-class _Candidates:
-    """The correspondences that passed the ratio test: query ``q_idx[i]`` ↔ training
-    descriptor ``t_idx[i]`` in view ``view[i]``; ``first_obj`` is each query's object."""
-
-    q_idx: NDArray[np.intp]
-    t_idx: NDArray[np.int64]
-    view: NDArray[np.int32]
-    first_obj: NDArray[np.int32]
-    passed: NDArray[np.bool_]
-    nearest: NDArray[np.int64]  # per query: its nearest training descriptor (-1: none)
-
-
-def _ratio_candidates(db: _Loaded, features: Features, o: LabelOptions) -> _Candidates:
-    """The ratio test against the nearest descriptor of another object, and the candidates.
-
-    For a query that passed, every fetched neighbour of the same object that passes the ratio
-    test too (its copies in the object's other views: the same surface point seen from another
-    side or distance), the nearest per view. Each training view is then checked with all the
-    queries that match into it, not only those whose single nearest neighbour lies in it.
-    """
-    nq = len(features)
-    kk = max(2, min(o.k, db.index.ntotal))
-    dist, ids = db.index.search(features.descriptors, kk)
-    valid = ids[:, 0] >= 0
-    first_obj = np.where(valid, db.object_of[np.maximum(ids[:, 0], 0)], -1)
-    obj = np.where(ids >= 0, db.object_of[np.maximum(ids, 0)], -1)
-    other = (obj != first_obj[:, None]) & (ids >= 0)
-    has_other = other.any(axis=1)
-    j2 = np.argmax(other, axis=1)
-    d2 = np.where(has_other, dist[np.arange(nq), j2], dist[:, -1])
-    limit = (o.ratio * o.ratio) * d2
-    passed = valid & (dist[:, 0] < limit)
-    cand = passed[:, None] & (obj == first_obj[:, None]) & (ids >= 0) & (dist < limit[:, None])
-    rows, cols = np.nonzero(cand)  # row-major: nearest first within each query
-    t_all = ids[rows, cols]
-    v_all = db.view_of[t_all].astype(np.int64)
-    key = rows.astype(np.int64) * (int(db.view_of.max()) + 1) + v_all
-    _, first = np.unique(key, return_index=True)
-    q_idx = rows[first].astype(np.intp)
-    t_idx = t_all[first]
-    return _Candidates(q_idx, t_idx, db.view_of[t_idx], first_obj, passed, ids[:, 0])
+    synthetic: NDArray[np.bool_] | None = None  # per descriptor: of a synthesised view
 
 
 def _detect_in_view(

@@ -31,7 +31,13 @@ from scenespeak.perception.recognition.schema import cached_quantiser, save_quan
 if TYPE_CHECKING:
     from scenespeak.perception.recognition.store import ObjectDatabase
 
-__all__ = ["descriptor_chunks", "index_of", "read_colour_models", "read_views"]
+__all__ = [
+    "descriptor_chunks",
+    "index_of",
+    "read_colour_models",
+    "read_views",
+    "synthetic_of",
+]
 
 
 _SELECT_VIEWS = " FROM views v JOIN objects o ON o.id = v.object_id ORDER BY v.id"
@@ -82,14 +88,44 @@ def read_views(
     return kp, object_of, view_of, sizes, labels, outlines
 
 
-def descriptor_chunks(db: ObjectDatabase, sizes: list[int]) -> Iterator[NDArray[np.uint8]]:
-    """The descriptors, one view at a time (in the order of :func:`read_views`)."""
+def synthetic_of(
+    db: ObjectDatabase, view_of: NDArray[np.int32]
+) -> tuple[NDArray[np.bool_] | None, NDArray[np.int32]]:
+    """Per descriptor (its view ``view_of``): whether its view was synthesised at ``db add``
+    (:func:`~scenespeak.perception.recognition.views.raised_views`, told by its source's
+    ending; None when no view was), and the view it is checked with: a synthesised view's
+    descriptors lie at their places in the learnt view they come from and count as that
+    view's (the learnt view of the same object whose source the synthesised one's names)."""
+    from scenespeak.perception.recognition.views import RAISED_SOURCE
+
+    rows = db._query("SELECT id, object_id, source FROM views ORDER BY id")
+    learnt = {(oid, src): vid for vid, oid, src in rows if not src.endswith(RAISED_SOURCE)}
+    to = {
+        vid: learnt.get((oid, src[: src.rfind(" seen ")]), vid)
+        for vid, oid, src in rows
+        if src.endswith(RAISED_SOURCE)
+    }
+    if not to:
+        return None, view_of
+    synthetic = np.isin(view_of, list(to))
+    pooled = view_of.copy()
+    for vid, src_vid in to.items():
+        pooled[view_of == vid] = src_vid
+    return synthetic, pooled
+
+
+def descriptor_chunks(
+    db: ObjectDatabase, sizes: list[int], skip: frozenset[int] = frozenset()
+) -> Iterator[NDArray[np.uint8]]:
+    """The descriptors, one view at a time (in the order of :func:`read_views`), those of the
+    views ``skip`` left out."""
     try:
         rows = db.conn.execute("SELECT v.id, v.descriptors" + _SELECT_VIEWS)
         for (vid, blob), n in zip(rows, sizes, strict=True):
             if len(blob) != n * _DIM:
                 raise DatabaseError(db.path, f"view {vid} is corrupt (wrong descriptor BLOB size)")
-            yield np.frombuffer(blob, np.uint8).reshape(n, _DIM)
+            if int(vid) not in skip:
+                yield np.frombuffer(blob, np.uint8).reshape(n, _DIM)
     except (sqlite3.DatabaseError, ValueError) as exc:
         raise DatabaseError(db.path, f"cannot be read (corrupt?): {exc}") from None
 
@@ -98,10 +134,22 @@ def index_of(
     db: ObjectDatabase, gen: int, total: int, sizes: list[int], nprobe: int, seed: int
 ) -> DescriptorIndex:
     """The index of the database's ``index_kind`` over every descriptor (a cached quantiser
-    reused)."""
+    reused). Its kind (``auto``) and an inverted file's cells are chosen from the *learnt*
+    descriptors alone: views synthesised for one object (:func:`synthetic_of`) do not move the
+    cells the other objects' descriptors fall into, nor turn an exact index into an
+    approximate one."""
+    from scenespeak.perception.recognition.views import RAISED_SOURCE
+
+    ids = [int(r[0]) for r in db._query("SELECT v.id" + _SELECT_VIEWS)]
+    raised = {
+        int(r[0])
+        for r in db._query("SELECT id FROM views WHERE source LIKE ?", ("%" + RAISED_SOURCE,))
+    }
+    skip = frozenset(raised)
+    n_learnt = total - sum(n for vid, n in zip(ids, sizes, strict=True) if vid in skip)
     kind = db.index_kind
     if kind == "auto":
-        kind = _auto_kind(total)
+        kind = _auto_kind(n_learnt)
     if kind == "faiss" and not _have_faiss():
         raise DatabaseError(
             db.path, "index 'faiss' needs the faiss-cpu package (pip install faiss-cpu)"
@@ -116,6 +164,7 @@ def index_of(
             seed=seed,
             centroids=centroids,
             cells=cells,
+            train=(lambda: descriptor_chunks(db, sizes, skip), n_learnt) if skip else None,
         )
         if (centroids is None or index.cache_rejected) and not db.readonly:
             save_quantiser(db.conn, gen, index)

@@ -19,16 +19,21 @@ class LabelOptions:
     ----------
     ratio : float
         0.8 — Lowe's ratio test: nearest distance < ``ratio`` × distance to the nearest
-        descriptor of a *different* object. Among the ``k`` nearest neighbours; if all ``k``
-        are of the same object, the ``k``-th distance stands in (a lower bound, so the test is
-        only stricter). Lowe (IJCV 2004) recommends 0.8; 0.85 and 0.9 were measured and not
-        better (``docs/database.md``).
+        descriptor of a *different* object, among the ``k`` nearest neighbours. If all ``k``
+        are of one object, the ``k``-th distance stands in, unless they lie in ``k`` different
+        views (one point's copies: then ``deep_k``). Synthesised views take part as
+        :mod:`~scenespeak.perception.recognition.ratio` says. Lowe (IJCV 2004) recommends 0.8;
+        0.85 and 0.9 were measured and not better (``docs/database.md``).
     min_inliers : int
         8 — geometric inliers needed to accept an object (a few stray matches never make one).
     ransac_threshold : float
         4.0 — reprojection tolerance in scene pixels.
     k : int
         16 — neighbours fetched per query descriptor.
+    deep_k : int
+        128 — neighbours fetched, in a second search, for a query whose ``k`` neighbours are
+        all of one object and in ``k`` different views; the second neighbour is then the
+        nearest other object's or the first one from a view already seen (``k`` or less: off).
     homography_min : int
         12 — matches needed to try a homography; a similarity is also tried from 2 matches.
     max_scale_ratio, max_angle_deg : float
@@ -94,6 +99,7 @@ class LabelOptions:
     min_inliers: int = 8
     ransac_threshold: float = 4.0
     k: int = 16
+    deep_k: int = 128
     homography_min: int = 12
     max_scale_ratio: float = 2.0
     max_angle_deg: float = 30.0

@@ -47,20 +47,25 @@ def _quantise(
     train_size: int,
     iters: int,
     seed: int,
-    centroids: NDArray[np.float32] | None,
-    cells: NDArray[np.integer] | None,
+    cached: tuple[NDArray[np.float32] | None, NDArray[np.integer] | None],
+    train: tuple[Callable[[], Iterator[NDArray[np.uint8]]], int] | None = None,
 ) -> tuple[NDArray[np.float32], NDArray[np.intp]]:
-    """Coarse quantiser (trained on a sample unless given) and each descriptor's cell."""
+    """Coarse quantiser (trained on a sample unless ``cached = (centroids, cells)`` gives it)
+    and each descriptor's cell. ``train``: the chunks the quantiser is trained on and their
+    count, when not all (the learnt descriptors, not those of synthesised views:
+    ``loading.index_of``)."""
+    centroids, cells = cached
     if centroids is None:
         cells = None
+        source, n_train = train if train is not None else (chunks, n)
         if nlist is None:
-            nlist = _default_nlist(n)
-        nlist = max(1, min(nlist, n))
+            nlist = _default_nlist(n_train)
+        nlist = max(1, min(nlist, n_train))
         rng = np.random.default_rng(seed)
-        pick = np.sort(rng.choice(n, size=min(n, train_size), replace=False))
+        pick = np.sort(rng.choice(n_train, size=min(n_train, train_size), replace=False))
         sample = np.empty((pick.size, _DIM), np.uint8)
         start = 0
-        for block in chunks():
+        for block in source():
             a, b = np.searchsorted(pick, [start, start + block.shape[0]])
             sample[a:b] = block[pick[a:b] - start]
             start += block.shape[0]

@@ -29,6 +29,7 @@ from scenespeak.perception.recognition.loading import (
     index_of,
     read_colour_models,
     read_views,
+    synthetic_of,
 )
 from scenespeak.perception.recognition.results import Labelling, ObjectInfo, TrainingView
 from scenespeak.perception.recognition.schema import (
@@ -282,7 +283,7 @@ class ObjectDatabase:
         max_features: int = 0,
         contrast_threshold: float = 0.02,
         progress: Progress | None = None,
-        raise_cylinders: bool = False,
+        raise_cylinders: bool = True,
     ) -> ObjectInfo:
         """Learn an object from training images and store it, in one transaction.
 
@@ -310,9 +311,7 @@ class ObjectDatabase:
             Called as ``progress(stage, done, total)`` with stage ``"extract"`` (per image,
             before anything is written) and ``"store"`` (per view written).
         raise_cylinders : bool
-            False — True: a cylinder also gets views synthesised from 18 and 32 degrees higher
-            (:mod:`~scenespeak.perception.recognition.cylinder_views`; measured, not on by
-            default: ``docs/database.md``, session 9).
+            True — a cylinder also gets views from 18° and 32° higher (``docs/database.md``).
 
         Returns
         -------
@@ -460,8 +459,9 @@ class ObjectDatabase:
         total = int(counts[1])
         kp, object_of, view_of, sizes, labels, outlines = read_views(self, total)
         index = index_of(self, gen, total, sizes, nprobe, seed)
+        syn, view_of = synthetic_of(self, view_of)
         self._loaded = _Loaded(
-            gen, index, object_of, view_of, kp[:, :2], kp[:, 2], kp[:, 3], labels, outlines
+            gen, index, object_of, view_of, kp[:, :2], kp[:, 2], kp[:, 3], labels, outlines, syn
         )
 
     def _set_nprobe(self, nprobe: int) -> None:

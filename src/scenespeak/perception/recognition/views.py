@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
@@ -26,6 +27,12 @@ MaskLike = str | PathLike[str] | NDArray[np.generic] | None
 # --------------------------------------------------------------------------------------------
 # Training views
 # --------------------------------------------------------------------------------------------
+
+
+#: How the source of a synthesised view ends (``"view_00.png seen 18 degrees higher"``): the
+#: labelling tells these views by it (:func:`~scenespeak.perception.recognition.loading.
+#: synthetic_of`), so no schema change was needed.
+RAISED_SOURCE = " degrees higher"
 
 
 def outline_from_mask(mask: NDArray[np.generic], *, tolerance: float = 1.0) -> NDArray[np.float32]:
@@ -163,7 +170,7 @@ def extract_views(
     sift: tuple[int, float],
     progress: Callable[[int, int], object] | None = None,
     *,
-    raise_cylinders: bool = False,
+    raise_cylinders: bool = True,
 ) -> list[_ViewData]:
     """Each training image's view (its features inside its mask, outline and signatures) with
     ``sift = (max_features, contrast_threshold)``; ``progress(done, total)`` after each; with
@@ -185,10 +192,19 @@ def raised_views(
     contrast_threshold: float,
 ) -> list[_ViewData]:
     """Views of a cylinder from higher up (:mod:`~scenespeak.perception.recognition.
-    cylinder_views`), synthesised from the masked training views, as extra views with their
-    own features and outlines (no colour or grey signature: the cues keep the real views'); []
-    for an object that is not a cylinder or has no masks."""
-    from scenespeak.perception.recognition.cylinder_views import elevated_views
+    cylinder_views`), synthesised from the masked training views; []  for an object that is
+    not a cylinder or has no masks. Each keeps its features *at their places in the training
+    view it comes from* (mapped back through the remap, :func:`~scenespeak.perception.
+    recognition.cylinder_views.source_rows`) and that view's outline, so the labelling checks
+    them with that view (:func:`~scenespeak.perception.recognition.loading.synthetic_of`):
+    the same surface point's learnt and synthesised descriptors vote for one view, not two.
+    No colour or grey signature: the cues keep the real views'."""
+    from scenespeak.perception.recognition.cylinder_views import (
+        RAISES,
+        raised_cylinders,
+        source_rows,
+        view_from,
+    )
 
     grays, ms = [], []
     for i, (img, msk) in enumerate(zip(images, masks, strict=True)):
@@ -196,15 +212,28 @@ def raised_views(
         grays.append(gray)
         ms.append(_read_mask(msk, i, gray.shape))
     out = []
-    for i, raise_deg, view, vmask in elevated_views(grays, ms):
-        feats = detect(
-            view, mask=vmask, max_features=max_features, contrast_threshold=contrast_threshold
-        )
-        if len(feats) == 0:
+    for i, cyl in enumerate(raised_cylinders(ms)):
+        mask = ms[i]
+        if cyl is None or mask is None:
             continue
-        h, w = view.shape[:2]
-        source = f"{_source_name(images[i], i, 'image')} seen {raise_deg:g} degrees higher"
-        out.append(_ViewData(source, w, h, True, feats, outline_from_mask(vmask)))
+        h, w = grays[i].shape[:2]
+        for raise_deg in RAISES:
+            view, vmask = view_from(grays[i], cyl, raise_deg)
+            feats = detect(
+                view, mask=vmask, max_features=max_features, contrast_threshold=contrast_threshold
+            )
+            rows, _ = source_rows((h, w), cyl, raise_deg)
+            col = np.clip(np.rint(feats.xy[:, 0]).astype(np.intp), 0, w - 1)
+            row = np.clip(np.rint(feats.xy[:, 1]).astype(np.intp), 0, h - 1)
+            back = rows[row, col]
+            feats = feats.subset(back >= 0)
+            if len(feats) == 0:
+                continue
+            xy = feats.xy.copy()
+            xy[:, 1] = back[back >= 0]
+            feats = dataclasses.replace(feats, xy=xy)
+            source = f"{_source_name(images[i], i, 'image')} seen {raise_deg:g}{RAISED_SOURCE}"
+            out.append(_ViewData(source, w, h, True, feats, outline_from_mask(mask)))
     return out
 
 
