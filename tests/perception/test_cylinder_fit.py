@@ -73,3 +73,45 @@ def test_synthesised_keypoints_vote_for_the_learnt_view_they_come_from(tmp_path:
         xy = np.rint(loaded.xy[loaded.synthetic]).astype(int)
         inside = _silhouette()[np.clip(xy[:, 1], 0, 199), np.clip(xy[:, 0], 0, 199)]
         assert inside.mean() > 0.95
+
+
+def _drawn_tin() -> tuple[list[NDArray[np.uint8]], list[NDArray[np.bool_]]]:
+    """Three textured views of the drawn cylinder (as in the test above)."""
+    rng = np.random.default_rng(0)
+    noise = cv2.GaussianBlur(rng.integers(0, 255, (200, 200)).astype(np.uint8), (0, 0), 2.0)
+    images, masks = [], []
+    for shift in (0, 40, 80):
+        m = _silhouette()
+        img = np.where(
+            m, cv2.normalize(np.roll(noise, shift, axis=1), None, 0, 255, cv2.NORM_MINMAX), 128
+        )
+        images.append(img.astype(np.uint8))
+        masks.append(m)
+    return images, masks
+
+
+def test_synthesised_views_are_told_by_their_table_not_their_name(tmp_path: Path) -> None:
+    # Which views were synthesised is written in the raised_views table at db add: an image
+    # named like a synthesised view is a learnt view, and removing or replacing an object
+    # leaves no row behind that a later view could inherit with a reused row id.
+    from scenespeak.perception.recognition.loading import raised_sources
+
+    images, masks = _drawn_tin()
+    named = tmp_path / "view_00.png seen 18 degrees higher"
+    cv2.imwrite(str(named) + ".png", images[0])
+    named.with_name(named.name + ".png").rename(named)
+    with ObjectDatabase.create(tmp_path / "o.db") as db:
+        db.add_object("plain", [str(named)], raise_cylinders=False)
+        assert raised_sources(db) == {}
+        db.add_object("tin", images, masks=masks)
+        to = raised_sources(db)
+        assert len(to) == 6 and len(set(to.values())) == 3
+        assert all(db._query("SELECT object_id FROM views WHERE id = ?", (v,)) for v in to)
+        db.add_object("tin", images[:1], masks=masks[:1], replace=True)
+        assert raised_sources(db) == {}  # one view is no cylinder: nothing synthesised now
+        rows = db.conn.execute("SELECT COUNT(*) FROM raised_views").fetchone()[0]
+        assert rows == 0
+        db.add_object("tin", images, masks=masks, replace=True)
+        assert len(raised_sources(db)) == 6
+        db.remove("tin")
+        assert db.conn.execute("SELECT COUNT(*) FROM raised_views").fetchone()[0] == 0

@@ -377,6 +377,8 @@ def remove_labels(path: Path, labels: list[str], waiting: Waiting | None = None)
         A label that is not in the database (then nothing is removed), or a lock held longer
         than ``db_wait_s``.
     """
+    from scenespeak.perception.recognition.views import forget_raised
+
     unique = list(dict.fromkeys(labels))
     conn = connect(path, readonly=False)
     try:
@@ -397,6 +399,7 @@ def remove_labels(path: Path, labels: list[str], waiting: Waiting | None = None)
                     )
                 ids.extend(int(r[0]) for r in rows)
             for oid in ids:
+                forget_raised(conn, oid)
                 conn.execute("DELETE FROM views WHERE object_id = ?", (oid,))
                 conn.execute("DELETE FROM objects WHERE id = ?", (oid,))
             conn.execute(

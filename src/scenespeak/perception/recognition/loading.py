@@ -34,6 +34,7 @@ if TYPE_CHECKING:
 __all__ = [
     "descriptor_chunks",
     "index_of",
+    "raised_sources",
     "read_colour_models",
     "read_views",
     "synthetic_of",
@@ -88,23 +89,28 @@ def read_views(
     return kp, object_of, view_of, sizes, labels, outlines
 
 
+def raised_sources(db: ObjectDatabase) -> dict[int, int]:
+    """Each synthesised view's row id → the learnt view's it comes from (the ``raised_views``
+    table, :func:`~scenespeak.perception.recognition.views.record_raised`; {} without it)."""
+    from scenespeak.perception.recognition.views import has_raised_table
+
+    if not has_raised_table(db.conn):
+        return {}
+    rows = db._query(
+        "SELECT r.view_id, r.source_view FROM raised_views r JOIN views v ON v.id = r.view_id"
+    )
+    return {int(a): int(b) for a, b in rows}
+
+
 def synthetic_of(
     db: ObjectDatabase, view_of: NDArray[np.int32]
 ) -> tuple[NDArray[np.bool_] | None, NDArray[np.int32]]:
     """Per descriptor (its view ``view_of``): whether its view was synthesised at ``db add``
-    (:func:`~scenespeak.perception.recognition.views.raised_views`, told by its source's
-    ending; None when no view was), and the view it is checked with: a synthesised view's
-    descriptors lie at their places in the learnt view they come from and count as that
-    view's (the learnt view of the same object whose source the synthesised one's names)."""
-    from scenespeak.perception.recognition.views import RAISED_SOURCE
-
-    rows = db._query("SELECT id, object_id, source FROM views ORDER BY id")
-    learnt = {(oid, src): vid for vid, oid, src in rows if not src.endswith(RAISED_SOURCE)}
-    to = {
-        vid: learnt.get((oid, src[: src.rfind(" seen ")]), vid)
-        for vid, oid, src in rows
-        if src.endswith(RAISED_SOURCE)
-    }
+    (:func:`~scenespeak.perception.recognition.views.raised_views`, as the ``raised_views``
+    table records; None when no view was), and the view it is checked with: a synthesised
+    view's descriptors lie at their places in the learnt view they come from and count as that
+    view's."""
+    to = raised_sources(db)
     if not to:
         return None, view_of
     synthetic = np.isin(view_of, list(to))
@@ -138,13 +144,8 @@ def index_of(
     descriptors alone: views synthesised for one object (:func:`synthetic_of`) do not move the
     cells the other objects' descriptors fall into, nor turn an exact index into an
     approximate one."""
-    from scenespeak.perception.recognition.views import RAISED_SOURCE
-
     ids = [int(r[0]) for r in db._query("SELECT v.id" + _SELECT_VIEWS)]
-    raised = {
-        int(r[0])
-        for r in db._query("SELECT id FROM views WHERE source LIKE ?", ("%" + RAISED_SOURCE,))
-    }
+    raised = set(raised_sources(db))
     skip = frozenset(raised)
     n_learnt = total - sum(n for vid, n in zip(ids, sizes, strict=True) if vid in skip)
     kind = db.index_kind

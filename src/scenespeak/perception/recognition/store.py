@@ -43,7 +43,14 @@ from scenespeak.perception.recognition.schema import (
     _now,
     migrate,
 )
-from scenespeak.perception.recognition.views import ImageLike, MaskLike, _ViewData, extract_views
+from scenespeak.perception.recognition.views import (
+    ImageLike,
+    MaskLike,
+    extract_views,
+    forget_raised,
+    insert_view,
+    record_raised,
+)
 from scenespeak.safeio import as_path
 
 __all__ = ["ObjectDatabase"]
@@ -344,10 +351,12 @@ class ObjectDatabase:
             now = _now()
             cur = conn.execute("INSERT INTO objects(label, added) VALUES (?, ?)", (label, now))
             oid = int(cur.lastrowid or 0)
+            ids = []
             for i, v in enumerate(views):
-                _insert_view(conn, oid, v)
+                ids.append(insert_view(conn, oid, v))
                 if progress is not None:
                     progress("store", i + 1, len(views))
+            record_raised(conn, views, ids)
         self._loaded = None
         return ObjectInfo(oid, label, len(views), sum(len(v.features) for v in views), now)
 
@@ -404,6 +413,7 @@ class ObjectDatabase:
         if old and not missing_ok:
             raise DatabaseError(self.path, _duplicate(label))
         for (oid,) in old:
+            forget_raised(conn, oid)
             conn.execute(
                 "DELETE FROM view_colours WHERE view_id IN "
                 "(SELECT id FROM views WHERE object_id = ?)",
@@ -569,31 +579,3 @@ class ObjectDatabase:
         self.load(nprobe=opts.nprobe)
         assert self._loaded is not None
         return functools.partial(label_features, self._loaded, o=opts)
-
-
-def _insert_view(conn: sqlite3.Connection, oid: int, v: _ViewData) -> None:
-    """Write one training view of object ``oid``: its features as BLOBs and its outline."""
-    f = v.features
-    kp = np.column_stack([f.xy, f.size, f.angle]).astype(np.float32)
-    conn.execute(
-        "INSERT INTO views(object_id, source, width, height, has_mask, n, "
-        "descriptors, keypoints, outline) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?)",
-        (
-            oid,
-            v.source,
-            v.width,
-            v.height,
-            int(v.has_mask),
-            len(f),
-            np.ascontiguousarray(f.descriptors, np.uint8).tobytes(),
-            kp.tobytes(),
-            np.ascontiguousarray(v.outline, np.float32).tobytes(),
-        ),
-    )
-    row = v.colour_row()
-    if row is not None:
-        conn.execute(
-            "INSERT INTO view_colours(view_id, signature, aspect, grey, grey_aspect) "
-            "VALUES (last_insert_rowid(), ?, ?, ?, ?)",
-            row,
-        )

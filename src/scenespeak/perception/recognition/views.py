@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import sqlite3
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from os import PathLike
@@ -29,10 +30,72 @@ MaskLike = str | PathLike[str] | NDArray[np.generic] | None
 # --------------------------------------------------------------------------------------------
 
 
-#: How the source of a synthesised view ends (``"view_00.png seen 18 degrees higher"``): the
-#: labelling tells these views by it (:func:`~scenespeak.perception.recognition.loading.
-#: synthetic_of`), so no schema change was needed.
+#: How the source of a synthesised view ends (``"view_00.png seen 18 degrees higher"``), for
+#: people reading ``db list``; the labelling tells these views by the ``raised_views`` table
+#: (:func:`record_raised`), never by the name (an image may be called anything).
 RAISED_SOURCE = " degrees higher"
+#: Each synthesised view and the learnt view of the same ``db add`` it comes from; created by
+#: the first ``db add`` that synthesises one (a database without it has no synthesised view).
+_RAISED_TABLE = (
+    "CREATE TABLE IF NOT EXISTS raised_views "
+    "(view_id INTEGER PRIMARY KEY, source_view INTEGER NOT NULL)"
+)
+
+
+def record_raised(conn: sqlite3.Connection, views: Sequence[_ViewData], ids: Sequence[int]) -> None:
+    """Write which of ``views`` (stored as rows ``ids``, in one transaction) were synthesised,
+    and from which of them (:attr:`_ViewData.raised_from`)."""
+    pairs = [(ids[k], ids[v.raised_from]) for k, v in enumerate(views) if v.raised_from is not None]
+    if pairs:
+        conn.execute(_RAISED_TABLE)
+        conn.executemany("INSERT INTO raised_views(view_id, source_view) VALUES (?, ?)", pairs)
+
+
+def insert_view(conn: sqlite3.Connection, oid: int, v: _ViewData) -> int:
+    """Write one training view of object ``oid``: its features as BLOBs and its outline; its
+    row id."""
+    f = v.features
+    kp = np.column_stack([f.xy, f.size, f.angle]).astype(np.float32)
+    cur = conn.execute(
+        "INSERT INTO views(object_id, source, width, height, has_mask, n, "
+        "descriptors, keypoints, outline) VALUES (?, ?, ?, ?, ?, ?, ?, ?, ?)",
+        (
+            oid,
+            v.source,
+            v.width,
+            v.height,
+            int(v.has_mask),
+            len(f),
+            np.ascontiguousarray(f.descriptors, np.uint8).tobytes(),
+            kp.tobytes(),
+            np.ascontiguousarray(v.outline, np.float32).tobytes(),
+        ),
+    )
+    vid = int(cur.lastrowid or 0)
+    row = v.colour_row()
+    if row is not None:
+        conn.execute(
+            "INSERT INTO view_colours(view_id, signature, aspect, grey, grey_aspect) "
+            "VALUES (?, ?, ?, ?, ?)",
+            (vid, *row),
+        )
+    return vid
+
+
+def forget_raised(conn: sqlite3.Connection, oid: int) -> None:
+    """Delete the ``raised_views`` rows of object ``oid``'s views (before the views go: a
+    later view may take a deleted view's row id)."""
+    if has_raised_table(conn):
+        conn.execute(
+            "DELETE FROM raised_views WHERE view_id IN (SELECT id FROM views WHERE object_id = ?)",
+            (oid,),
+        )
+
+
+def has_raised_table(conn: sqlite3.Connection) -> bool:
+    """Whether the database has a ``raised_views`` table (some ``db add`` synthesised views)."""
+    q = "SELECT 1 FROM sqlite_master WHERE type = 'table' AND name = 'raised_views'"
+    return conn.execute(q).fetchone() is not None
 
 
 def outline_from_mask(mask: NDArray[np.generic], *, tolerance: float = 1.0) -> NDArray[np.float32]:
@@ -94,6 +157,9 @@ class _ViewData:
     colour: tuple[NDArray[np.float32], float] | None = None
     #: the grey signature and object-box aspect inside the mask (None: no colour signature)
     grey: tuple[NDArray[np.float32], float] | None = None
+    #: for a view synthesised from another (:func:`raised_views`): that view's place among the
+    #: views of the same ``db add`` (None: a learnt view)
+    raised_from: int | None = None
 
     def colour_row(self) -> tuple[bytes, float, bytes | None, float | None] | None:
         """The view's ``view_colours`` row after its id: colour signature, aspect, grey
@@ -233,7 +299,7 @@ def raised_views(
             xy[:, 1] = back[back >= 0]
             feats = dataclasses.replace(feats, xy=xy)
             source = f"{_source_name(images[i], i, 'image')} seen {raise_deg:g}{RAISED_SOURCE}"
-            out.append(_ViewData(source, w, h, True, feats, outline_from_mask(mask)))
+            out.append(_ViewData(source, w, h, True, feats, outline_from_mask(mask), raised_from=i))
     return out
 
 
