@@ -422,7 +422,7 @@ def _after_stereo(
             # unknown objects named by a closer look at their region (recognition.closer), then
             # by colour and shape (recognition.colour); the points project into the left image
             # as given only when it was not resampled
-            left, matched = early.images[0], early.labelling.matched
+            left, matched = early.images[0], early.labelling.votes()
             evidence = KeypointEvidence.of_labelling(
                 rig.K_left, left.shape, early.features_left.xy, matched, early.id_to_label
             )

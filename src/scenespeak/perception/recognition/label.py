@@ -209,7 +209,7 @@ def label_features(db: _Loaded, features: Features, o: LabelOptions) -> Labellin
     detections = tuple(found)
     for i, det in enumerate(detections):
         labels[det.inliers] = i
-    return Labelling(labels, detections, matched, scale, turn)
+    return Labelling(labels, detections, matched, scale, turn, c.synthesised_only)
 
 
 def _match_geometry(

@@ -25,7 +25,7 @@ dense false matches are round the query. Two refinements (issue 10, session 10):
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -51,6 +51,8 @@ class Candidates:
     first_obj: NDArray[np.int32]
     passed: NDArray[np.bool_]
     nearest: NDArray[np.int64]  # per query: its nearest training descriptor (-1: none)
+    #: per query: passed only on a synthesised descriptor (empty: no synthesised view)
+    synthesised_only: NDArray[np.bool_] = field(default_factory=lambda: np.zeros(0, bool))
 
 
 @dataclass(frozen=True)
@@ -215,9 +217,11 @@ def ratio_candidates(db: _Loaded, features: Features, o: LabelOptions) -> Candid
         qa, tb = _candidates_of(db, ta, da, ia)
         q_idx = np.concatenate([q_idx, again[qa].astype(np.intp)])
         t_idx = np.concatenate([t_idx, tb])
+    only = np.zeros(0, bool)
     if n_syn:  # the synthesised test, for the queries the learnt one failed
         s = _synthesised_test(db, dist, ids, is_syn, r2)
         s = _Test(s.passed & ~t.passed, s.first_obj, s.limit, s.undecided)
+        only = s.passed.copy()
         qs, ts = _candidates_of(db, s, dist, ids)
         q_idx, t_idx = np.concatenate([q_idx, qs]), np.concatenate([t_idx, ts])
         t = _Test(
@@ -226,4 +230,4 @@ def ratio_candidates(db: _Loaded, features: Features, o: LabelOptions) -> Candid
             np.where(s.passed, s.limit, t.limit).astype(np.float32),
             t.undecided,
         )
-    return Candidates(q_idx, t_idx, db.view_of[t_idx], t.first_obj, t.passed, ids[:, 0])
+    return Candidates(q_idx, t_idx, db.view_of[t_idx], t.first_obj, t.passed, ids[:, 0], only)

@@ -128,6 +128,12 @@ class Labelling:
         keypoint's, and its orientation minus that keypoint's (degrees, in [0, 360)); NaN
         elsewhere. Votes of one object seen once agree in both (Lowe 2004, sec. 7: the Hough
         transform's scale and orientation bins); chance matches do not. Empty: not computed.
+    synthesised_only : (N,) bool
+        Keypoints that passed the ratio test only on a view synthesised at ``db add`` (a
+        cylinder seen from higher up, :mod:`~scenespeak.perception.recognition.cylinder_views`).
+        They verify detections like any match, but are not counted as keypoint votes for the
+        unknown-object cues (``KeypointEvidence``), whose thresholds were measured on learnt
+        views' votes. Empty: none.
     """
 
     labels: NDArray[np.int32]
@@ -139,6 +145,16 @@ class Labelling:
     match_turn: NDArray[np.float32] = field(
         default_factory=lambda: np.zeros(0, np.float32), repr=False
     )
+    synthesised_only: NDArray[np.bool_] = field(
+        default_factory=lambda: np.zeros(0, bool), repr=False
+    )
+
+    def votes(self) -> NDArray[np.int32]:
+        """``matched`` without the keypoints that passed only on a synthesised view (-1
+        there): the keypoints' votes for the unknown-object cues."""
+        if not self.synthesised_only.size:
+            return self.matched
+        return np.where(self.synthesised_only, -1, self.matched).astype(np.int32)
 
     def names(self) -> list[str | None]:
         """The label of each query keypoint, ``None`` where unknown."""
