@@ -24,7 +24,7 @@ vote), and on the held-out dev set the check cost a right grey "jar" at 0.75 m (
 
 from __future__ import annotations
 
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 import cv2
@@ -164,19 +164,6 @@ class KeypointEvidence:
         rows_cols = (int(shape[0]), int(shape[1]))
         cam = np.asarray(camera, np.float64)
         return cls.from_matches(cam, rows_cols, xy, matched, id_to_label)
-
-    @classmethod
-    def veto(
-        cls,
-        camera: NDArray[np.float64],
-        shape: tuple[int, ...],
-        keypoints_xy: NDArray[np.float64],
-        matched: NDArray[np.integer],
-        id_to_label: Mapping[int, str],
-    ) -> Callable[[SceneObject, str], str | None] | None:
-        """:meth:`refuses` of :meth:`of_labelling` (None without the database's ids)."""
-        ev = cls.of_labelling(camera, shape, keypoints_xy, matched, id_to_label)
-        return None if ev is None else ev.refuses
 
     def votes_in(self, obj: SceneObject) -> dict[str, int]:
         """How many of the keypoints in ``obj``'s image region voted for each label.

@@ -52,7 +52,7 @@ from scenespeak.perception.recognition.label import _Candidates, _detect_object,
 from scenespeak.perception.recognition.options import LabelOptions
 from scenespeak.perception.recognition.results import Labelling
 from scenespeak.perception.recognition.shape_guard import ShapeGuard
-from scenespeak.perception.recognition.views import _read_image, _read_mask, outline_from_mask
+from scenespeak.perception.recognition.views import outline_from_mask, read_grey_views
 
 __all__ = [
     "ELEVATIONS",
@@ -133,11 +133,7 @@ def elevated_features(
     """``(view index, elevation, features, outline)`` of every view of a cylinder seen from
     each elevation of :data:`ELEVATIONS` at least :data:`MIN_RAISE` above its own (``sift =
     (max_features, contrast_threshold)``, as the training views); [] for other objects."""
-    grays, ms = [], []
-    for i, (img, msk) in enumerate(zip(images, masks, strict=True)):
-        gray = _read_image(img, i)
-        grays.append(gray)
-        ms.append(_read_mask(msk, i, gray.shape))
+    grays, ms = read_grey_views(images, masks)
     out = []
     for i, cyl in enumerate(cylinder_views_of(ms)):
         if cyl is None:

@@ -251,6 +251,19 @@ def extract_views(
     return out
 
 
+def read_grey_views(
+    images: Sequence[ImageLike], masks: Sequence[MaskLike]
+) -> tuple[list[NDArray[np.uint8]], list[NDArray[np.bool_] | None]]:
+    """Each training image in grey and its mask (None: no mask), checked as at ``db add``."""
+    grays: list[NDArray[np.uint8]] = []
+    ms: list[NDArray[np.bool_] | None] = []
+    for i, (img, msk) in enumerate(zip(images, masks, strict=True)):
+        gray = _read_image(img, i)
+        grays.append(gray)
+        ms.append(_read_mask(msk, i, gray.shape))
+    return grays, ms
+
+
 def raised_views(
     images: Sequence[ImageLike],
     masks: Sequence[MaskLike],
@@ -272,11 +285,7 @@ def raised_views(
         view_from,
     )
 
-    grays, ms = [], []
-    for i, (img, msk) in enumerate(zip(images, masks, strict=True)):
-        gray = _read_image(img, i)
-        grays.append(gray)
-        ms.append(_read_mask(msk, i, gray.shape))
+    grays, ms = read_grey_views(images, masks)
     out = []
     for i, cyl in enumerate(raised_cylinders(ms)):
         mask = ms[i]
