@@ -572,6 +572,7 @@ def database_from_dataset(
         If the dataset has no ``objects`` folder.
     """
     from scenespeak.perception.recognition import ObjectDatabase
+    from scenespeak.perception.segmentation import training_mask
 
     learnt: list[str] = []
     folders = _object_folders(dataset)
@@ -583,17 +584,8 @@ def database_from_dataset(
             masks = [v.with_name(v.stem + "_mask.png") for v in views]
             use_masks: Any = masks if all(m.exists() for m in masks) else None
             if use_masks is None:
-                use_masks = [_auto_mask(v) for v in views]
+                use_masks = [training_mask(v) for v in views]
             database.add_object(folder.name, views, masks=use_masks, replace=replace)
             add_elevated_views(database, folder.name, views, use_masks)
             learnt.append(folder.name)
     return learnt
-
-
-def _auto_mask(path: Path) -> Any:
-    from scenespeak.perception.features import load_image
-    from scenespeak.perception.segmentation import object_mask
-
-    img = load_image(path, gray=False)
-    feats = detect(to_gray(img))
-    return object_mask(img, feats.xy)

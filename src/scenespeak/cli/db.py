@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 import sys
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any
 
 import typer
 
@@ -40,9 +40,10 @@ def db_add(
     from scenespeak.cleantext import check_label
     from scenespeak.perception.recognition import ObjectDatabase
     from scenespeak.perception.recognition.elevated import add_elevated_views
+    from scenespeak.perception.segmentation import training_mask
 
     check_label(label)
-    masks = list(mask) if mask else None
+    masks: list[Any] | None = list(mask) if mask else None
     if masks is not None and len(masks) != len(images):
         raise InputError("--mask", f"{len(masks)} masks for {len(images)} images; give one each")
     _ready_to_write(db, create=True)
@@ -50,6 +51,8 @@ def db_add(
         _status(f"learning {label!r} from {len(images)} image(s)", quiet),
         ObjectDatabase.open(db) as database,
     ):
+        if masks is None:  # the object on its plain background, as `evaluate` learns it
+            masks = [training_mask(p) for p in images]
         info = database.add_object(label, images, masks=masks, replace=replace)
         add_elevated_views(database, info.label, images, masks)
     _echo(f"added {info.label!r}: {info.views} view(s), {info.descriptors} descriptors")

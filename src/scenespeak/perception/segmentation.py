@@ -36,12 +36,13 @@ True
 from __future__ import annotations
 
 from dataclasses import dataclass
+from os import PathLike
 
 import cv2
 import numpy as np
 from numpy.typing import NDArray
 
-__all__ = ["MaskOptions", "object_mask"]
+__all__ = ["MaskOptions", "object_mask", "training_mask"]
 
 
 @dataclass(frozen=True)
@@ -214,3 +215,19 @@ def object_mask(
         if float(fg[r, c].mean()) < opts.min_keypoint_share:
             return None
     return fg
+
+
+def training_mask(path: str | PathLike[str]) -> NDArray[np.bool_] | None:
+    """:func:`object_mask` of the training photo at ``path`` (in colour, with its SIFT
+    keypoints), or None to keep the whole image: what ``scenespeak db add`` and ``scenespeak
+    evaluate`` use for a view given without a mask.
+
+    Raises
+    ------
+    ImageError
+        If the file cannot be read as an image (its name and the problem).
+    """
+    from scenespeak.perception.features import detect, load_image, to_gray
+
+    img = load_image(path, gray=False)
+    return object_mask(img, detect(to_gray(img)).xy)
